@@ -1,0 +1,24 @@
+//! drape: cloth simulation on robots.
+//!
+//! The core (`cloth`, `effects`, `integrate`, `collide`, `scene`, `sim`, `mesh`, `robot`)
+//! is pure Rust with no ROS types; `ros` (feature `ros`, on by default) turns cloth
+//! into ROS 2 messages, writes rosbag2 MCAP files and runs the live node.
+//! See `DESIGN.md` at the repository's shared folder for the layering.
+
+pub mod cloth;
+pub mod collide;
+pub mod garment;
+pub mod effects;
+pub mod integrate;
+pub mod mesh;
+pub mod robot;
+pub mod scene;
+pub mod sim;
+#[cfg(feature = "ros")]
+pub mod ros;
+
+/// All simulation state is double precision: convergence-order and energy tests
+/// need the headroom, and the cost over f32 is small for scalar spring loops.
+pub type Vec3 = glam::DVec3;
+/// 3x3 blocks of force Jacobians.
+pub type Mat3 = glam::DMat3;
