@@ -7,18 +7,20 @@
 
 pub mod cloth;
 pub mod collide;
-pub mod garment;
 pub mod effects;
+pub mod garment;
 pub mod integrate;
 pub mod mesh;
+pub mod pose;
 pub mod robot;
-pub mod scene;
-pub mod sim;
 #[cfg(feature = "ros")]
 pub mod ros;
+pub mod scene;
+pub mod sim;
 
 /// All simulation state is double precision: convergence-order and energy tests
 /// need the headroom, and the cost over f32 is small for scalar spring loops.
 pub type Vec3 = glam::DVec3;
 /// 3x3 blocks of force Jacobians.
 pub type Mat3 = glam::DMat3;
+pub use pose::Pose;

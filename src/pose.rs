@@ -1,0 +1,129 @@
+//! Rigid poses in f64, shared by obstacles, robot links and attachments.
+
+use crate::Vec3;
+use glam::{DMat3, DQuat};
+use serde::{Deserialize, Serialize};
+
+/// A rigid transform `x -> rotation * x + translation` (child frame expressed in parent frame).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    pub rotation: DQuat,
+    pub translation: Vec3,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl Pose {
+    pub const IDENTITY: Pose = Pose {
+        rotation: DQuat::IDENTITY,
+        translation: Vec3::ZERO,
+    };
+
+    pub fn new(translation: Vec3, rotation: DQuat) -> Self {
+        Self {
+            rotation,
+            translation,
+        }
+    }
+
+    pub fn from_translation(translation: Vec3) -> Self {
+        Self::new(translation, DQuat::IDENTITY)
+    }
+
+    /// URDF convention: roll about x, then pitch about y, then yaw about z (fixed axes),
+    /// i.e. `R = Rz(yaw) * Ry(pitch) * Rx(roll)`.
+    pub fn from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Self {
+        let rot = DQuat::from_rotation_z(rpy[2])
+            * DQuat::from_rotation_y(rpy[1])
+            * DQuat::from_rotation_x(rpy[0]);
+        Self::new(Vec3::from(xyz), rot)
+    }
+
+    pub fn transform_point(&self, p: Vec3) -> Vec3 {
+        self.rotation * p + self.translation
+    }
+
+    pub fn transform_vector(&self, v: Vec3) -> Vec3 {
+        self.rotation * v
+    }
+
+    pub fn inverse_transform_point(&self, p: Vec3) -> Vec3 {
+        self.rotation.inverse() * (p - self.translation)
+    }
+
+    pub fn inverse(&self) -> Pose {
+        let inv = self.rotation.inverse();
+        Pose::new(-(inv * self.translation), inv)
+    }
+
+    /// `self * other`: apply `other` first, then `self`.
+    pub fn mul(&self, other: &Pose) -> Pose {
+        Pose::new(
+            self.rotation * other.translation + self.translation,
+            (self.rotation * other.rotation).normalize(),
+        )
+    }
+
+    pub fn rotation_matrix(&self) -> DMat3 {
+        DMat3::from_quat(self.rotation)
+    }
+
+    /// Interpolates between two poses (linear translation, slerp rotation); `s` in [0, 1].
+    /// Used to move obstacles smoothly across the substeps between two pose updates.
+    pub fn lerp(&self, other: &Pose, s: f64) -> Pose {
+        Pose::new(
+            self.translation.lerp(other.translation, s),
+            self.rotation.slerp(other.rotation, s).normalize(),
+        )
+    }
+
+    /// Velocity of the material point currently at world position `p`, for a frame moving from
+    /// `self` to `next` over `dt` seconds (finite rotation converted to an angular velocity).
+    pub fn point_velocity(&self, next: &Pose, p: Vec3, dt: f64) -> Vec3 {
+        if dt <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let local = self.inverse_transform_point(p);
+        (next.transform_point(local) - p) / dt
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.translation.is_finite() && self.rotation.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_composes_to_identity() {
+        let p = Pose::from_xyz_rpy([0.3, -1.0, 2.0], [0.4, -0.7, 1.9]);
+        let q = p.mul(&p.inverse());
+        assert!(q.translation.length() < 1e-12);
+        assert!(q.rotation.angle_between(DQuat::IDENTITY) < 1e-9);
+    }
+
+    #[test]
+    fn rpy_matches_urdf_convention() {
+        // yaw 90 degrees maps x to y.
+        let p = Pose::from_xyz_rpy([0.0; 3], [0.0, 0.0, std::f64::consts::FRAC_PI_2]);
+        let v = p.transform_vector(Vec3::X);
+        assert!((v - Vec3::Y).length() < 1e-12);
+        // roll then pitch: R = Ry(pi/2) Rx(pi/2); z -> Rx: -y -> Ry: -y
+        let p = Pose::from_xyz_rpy(
+            [0.0; 3],
+            [
+                std::f64::consts::FRAC_PI_2,
+                std::f64::consts::FRAC_PI_2,
+                0.0,
+            ],
+        );
+        let v = p.transform_vector(Vec3::Z);
+        assert!((v - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-12, "{v}");
+    }
+}
