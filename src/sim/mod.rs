@@ -1,1 +1,393 @@
-//! sim (placeholder)
+//! `Simulation::step`: the order of one step, the divergence guard and the metrics.
+//!
+//! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way:
+//! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
+//! 2. effects give forces and the integrator advances the state;
+//! 3. the guard checks the result (and subdivides or stops per policy);
+//! 4. collisions and constraints fix the new state;
+//! 5. metrics are recorded.
+
+mod guard;
+
+pub use guard::{DivergenceError, DivergencePolicy, GuardSettings, Symptom};
+
+use crate::cloth::{Cloth, Kinematic};
+use crate::effects::{EffectSet, State};
+use crate::integrate::{Constraints, Dynamics, Filter, Integrator, IntegratorStats};
+use crate::{Pose, Vec3};
+use std::time::Instant;
+
+/// Time stepping settings of a simulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepSettings {
+    /// Frame step (s): one call to [`Simulation::step`].
+    pub dt: f64,
+    pub substeps: u32,
+    pub guard: GuardSettings,
+}
+
+/// What one frame step did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepMetrics {
+    pub time: f64,
+    pub substeps: u32,
+    /// Substeps that were redone as smaller steps by the divergence guard.
+    pub subdivisions: u32,
+    pub force_evaluations: u32,
+    pub cg_iterations: u32,
+    pub cg_residual_max: f64,
+    pub kinetic_energy: f64,
+    pub potential_energy: f64,
+    pub max_speed: f64,
+    pub wall_time_s: f64,
+}
+
+/// Moving frames that kinematic vertices attach to. A frame step moves each frame from `start`
+/// to `end`; substeps see poses interpolated between the two, so fast motion is not a jump.
+#[derive(Debug, Clone, Default)]
+pub struct Frames {
+    pub names: Vec<String>,
+    start: Vec<Pose>,
+    end: Vec<Pose>,
+}
+
+impl Frames {
+    pub fn add(&mut self, name: &str, pose: Pose) -> usize {
+        self.names.push(name.to_string());
+        self.start.push(pose);
+        self.end.push(pose);
+        self.names.len() - 1
+    }
+
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// Pose at fraction `s` of the current frame step.
+    pub fn at(&self, frame: usize, s: f64) -> Pose {
+        self.start[frame].lerp(&self.end[frame], s)
+    }
+
+    /// Current (end-of-step) pose.
+    pub fn pose(&self, frame: usize) -> Pose {
+        self.end[frame]
+    }
+}
+
+pub struct Simulation {
+    pub cloth: Cloth,
+    effects: EffectSet,
+    integrator: Box<dyn Integrator>,
+    pub frames: Frames,
+    pub settings: StepSettings,
+    constraints: Constraints,
+    time: f64,
+    /// Energy of the current state, if known (saves one evaluation per substep).
+    energy_cache: Option<(f64, f64)>,
+    // Scratch buffers.
+    x_save: Vec<Vec3>,
+    v_save: Vec<Vec3>,
+    scratch_f: Vec<Vec3>,
+    last: StepMetrics,
+}
+
+impl Simulation {
+    pub fn new(
+        cloth: Cloth,
+        effects: EffectSet,
+        mut integrator: Box<dyn Integrator>,
+        frames: Frames,
+        settings: StepSettings,
+    ) -> Self {
+        let n = cloth.len();
+        integrator.prepare(&effects, n);
+        Self {
+            cloth,
+            effects,
+            integrator,
+            frames,
+            settings,
+            constraints: Constraints::free(n),
+            time: 0.0,
+            energy_cache: None,
+            x_save: Vec::new(),
+            v_save: Vec::new(),
+            scratch_f: Vec::new(),
+            last: StepMetrics::default(),
+        }
+    }
+
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    pub fn effects(&self) -> &EffectSet {
+        &self.effects
+    }
+
+    pub fn integrator_name(&self) -> &'static str {
+        self.integrator.name()
+    }
+
+    pub fn last_metrics(&self) -> &StepMetrics {
+        &self.last
+    }
+
+    /// Sets where a frame will be at the end of the next frame step.
+    pub fn set_frame_target(&mut self, frame: usize, pose: Pose) {
+        self.frames.end[frame] = pose;
+    }
+
+    /// Kinetic energy of free vertices and potential energy of every conservative effect.
+    pub fn energy(&self) -> (f64, f64) {
+        let ke = self.kinetic_energy();
+        (ke, self.effects.energy(&self.cloth.x))
+    }
+
+    fn kinetic_energy(&self) -> f64 {
+        let c = &self.cloth;
+        let mut ke: f64 = c
+            .v
+            .iter()
+            .zip(&c.mass)
+            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .sum();
+        for (i, _) in &c.kinematic {
+            ke -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
+        }
+        ke
+    }
+
+    /// Advances one frame (`settings.dt`).
+    pub fn step(&mut self) -> Result<&StepMetrics, DivergenceError> {
+        let wall = Instant::now();
+        let mut m = StepMetrics::default();
+        let n_sub = self.settings.substeps.max(1);
+        let h = self.settings.dt / n_sub as f64;
+        let t0 = self.time;
+        for k in 0..n_sub {
+            let s0 = k as f64 / n_sub as f64;
+            let s1 = (k + 1) as f64 / n_sub as f64;
+            self.substep(t0 + k as f64 * h, h, s0, s1, 0, &mut m)?;
+        }
+        for f in 0..self.frames.len() {
+            self.frames.start[f] = self.frames.end[f];
+        }
+        self.time = t0 + self.settings.dt;
+        let (ke, pe) = self.energy();
+        m.time = self.time;
+        m.kinetic_energy = ke;
+        m.potential_energy = pe;
+        m.max_speed = self
+            .cloth
+            .v
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max);
+        m.wall_time_s = wall.elapsed().as_secs_f64();
+        self.last = m;
+        Ok(&self.last)
+    }
+
+    /// World position of a kinematic vertex at fraction `s` of the frame step.
+    fn target(&self, k: &Kinematic, s: f64) -> Vec3 {
+        match *k {
+            Kinematic::Pinned(p) => p,
+            Kinematic::Attached { frame, local } => self.frames.at(frame, s).transform_point(local),
+        }
+    }
+
+    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence.
+    fn substep(
+        &mut self,
+        t: f64,
+        h: f64,
+        s0: f64,
+        s1: f64,
+        depth: u32,
+        m: &mut StepMetrics,
+    ) -> Result<(), DivergenceError> {
+        let n = self.cloth.len();
+        // 1. Kinematic vertices: start on target, move at the constant velocity that reaches the end target.
+        self.constraints = Constraints::free(n);
+        for (i, k) in &self.cloth.kinematic {
+            let (a, b) = (self.target(k, s0), self.target(k, s1));
+            let i = *i as usize;
+            self.cloth.x[i] = a;
+            self.cloth.v[i] = (b - a) / h;
+            self.constraints.filter[i] = Filter::Fixed;
+            self.constraints.target_velocity[i] = self.cloth.v[i];
+        }
+        let e0 = match self.energy_cache {
+            Some(e) => e,
+            None => self.energies(),
+        };
+        let w_ext = self.external_work_rate(t);
+        self.x_save.clone_from(&self.cloth.x);
+        self.v_save.clone_from(&self.cloth.v);
+
+        // 2. Integrate.
+        let stats: IntegratorStats = {
+            let d = Dynamics {
+                effects: &self.effects,
+                mass: &self.cloth.mass,
+                constraints: &self.constraints,
+            };
+            self.integrator
+                .step(&d, t, h, &mut self.cloth.x, &mut self.cloth.v)
+        };
+        m.force_evaluations += stats.force_evaluations;
+        m.cg_iterations += stats.cg_iterations;
+        m.cg_residual_max = m.cg_residual_max.max(stats.cg_residual);
+
+        // 3. Guard.
+        match self.check(h, e0, w_ext.as_deref()) {
+            Ok(e1) => self.energy_cache = Some(e1),
+            Err((vertex, symptom)) => {
+                self.cloth.x.clone_from(&self.x_save);
+                self.cloth.v.clone_from(&self.v_save);
+                self.energy_cache = Some(e0);
+                let g = self.settings.guard;
+                if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
+                    m.subdivisions += 1;
+                    let sm = 0.5 * (s0 + s1);
+                    self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
+                    return self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m);
+                }
+                return Err(self.divergence_error(t, h, vertex, symptom));
+            }
+        }
+
+        // 4. Constraints: kinematic vertices end exactly on target (no drift from round-off).
+        for (i, k) in &self.cloth.kinematic {
+            self.cloth.x[*i as usize] = self.target(k, s1);
+        }
+        m.substeps += 1;
+        Ok(())
+    }
+
+    /// Work done on the cloth during the substep by forces from outside it (wind and moving
+    /// attachments), evaluated at the start state, per unit displacement: returns the forces.
+    fn external_work_rate(&mut self, t: f64) -> Option<Vec<Vec3>> {
+        let moving_attachments = self
+            .cloth
+            .kinematic
+            .iter()
+            .any(|(i, _)| self.cloth.v[*i as usize] != Vec3::ZERO);
+        let s = State {
+            t,
+            x: &self.cloth.x,
+            v: &self.cloth.v,
+        };
+        let n = self.cloth.len();
+        crate::integrate::scratch(&mut self.scratch_f, n);
+        let mut fext = vec![Vec3::ZERO; n];
+        let mut any = false;
+        if self.effects.injecting_forces(&s, &mut self.scratch_f) {
+            fext.copy_from_slice(&self.scratch_f);
+            any = true;
+        }
+        if moving_attachments {
+            // Power a driven vertex puts into the cloth: minus the internal force on it times its
+            // velocity (gravity on the driven vertex itself does no work on the cloth).
+            self.effects.forces(&s, &mut self.scratch_f);
+            for (i, _) in &self.cloth.kinematic {
+                let i = *i as usize;
+                fext[i] = -self.scratch_f[i];
+            }
+            any = true;
+        }
+        any.then_some(fext)
+    }
+
+    /// (total energy, dynamic energy): total = kinetic + every potential; dynamic = kinetic + elastic
+    /// (total without the gravity potential, so it is never negative).
+    fn energies(&self) -> (f64, f64) {
+        let (elastic, gravity) = self.effects.energy_split(&self.cloth.x);
+        let ke = self.kinetic_energy();
+        (ke + elastic + gravity, ke + elastic)
+    }
+
+    /// Checks the integrator's output; returns the new energies or the first bad vertex.
+    ///
+    /// Runaway energy: over one substep the total energy may grow by the work of wind and driven
+    /// vertices, plus `energy_growth` times the dynamic energy at the start, plus the first-order
+    /// error an explicit step makes under gravity (`h sum m |g| |v|`). An instability multiplies the
+    /// dynamic energy every step and trips this within a few steps; a stable step never comes close.
+    fn check(&self, h: f64, e0: (f64, f64), fext: Option<&[Vec3]>) -> Result<(f64, f64), (usize, Symptom)> {
+        let c = &self.cloth;
+        let g = &self.settings.guard;
+        for i in 0..c.len() {
+            if !c.x[i].is_finite() || !c.v[i].is_finite() {
+                return Err((i, Symptom::NonFinite));
+            }
+        }
+        let (fastest, speed) = c
+            .v
+            .iter()
+            .map(|v| v.length())
+            .enumerate()
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        if speed > g.max_speed {
+            return Err((fastest, Symptom::Speed(speed)));
+        }
+        let e1 = self.energies();
+        if !e1.0.is_finite() {
+            return Err((fastest, Symptom::NonFinite));
+        }
+        let work: f64 = match fext {
+            Some(f) => (0..c.len())
+                .map(|i| f[i].dot(c.x[i] - self.x_save[i]).abs())
+                .sum(),
+            None => 0.0,
+        };
+        let gravity = self.effects.gravity().length();
+        let gravity_error: f64 = h
+            * gravity
+            * (0..c.len())
+                .map(|i| c.mass[i] * c.v[i].length().max(self.v_save[i].length()))
+                .sum::<f64>();
+        let total_mass: f64 = c.mass.iter().sum();
+        let floor = 1e-12 * (1.0 + total_mass);
+        let allowed = work + g.energy_growth * e0.1 + gravity_error + floor;
+        let gained = e1.0 - e0.0;
+        if gained > allowed {
+            return Err((fastest, Symptom::EnergyGain { gained, allowed }));
+        }
+        Ok(e1)
+    }
+
+    fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
+        let (cloth, local) = match self.cloth.piece_of(vertex) {
+            Some(p) => (p.name.clone(), vertex - p.first_vertex),
+            None => (String::from("?"), vertex),
+        };
+        let suspect = self
+            .effects
+            .stiffness(&self.cloth.mass)
+            .into_iter()
+            .next()
+            .map(|b| {
+                let ho = h * b.omega_sq.sqrt();
+                (b, ho)
+            });
+        DivergenceError {
+            time: t,
+            step: h,
+            cloth,
+            vertex: local,
+            symptom,
+            integrator: self.integrator.name(),
+            suspect,
+            stability_limit: self.integrator.stability_limit(),
+        }
+    }
+}

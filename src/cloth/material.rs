@@ -1,0 +1,67 @@
+//! Material parameters of one cloth piece.
+
+use serde::{Deserialize, Serialize};
+
+/// Damping terms; all default to zero (off).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Damping {
+    /// Spring damping along each stretch/shear spring (N s/m).
+    pub spring: f64,
+    /// Air drag on absolute velocity, as a rate (1/s): `f = -air * m * v`.
+    pub air: f64,
+    /// Velocity diffusion between neighbours (N s/m): `f_i = diffusion * sum_j (v_j - v_i)`.
+    pub diffusion: f64,
+}
+
+/// Material of a cloth piece. Stiffnesses are per spring / per stencil, in SI units.
+///
+/// Stretch energy of a spring is `E = k/2 (|xi - xj| - l)^2`, so `k` is Hooke's constant in N/m
+/// (the survey writes `k (|ri - rj| - l)^2`: its `k` is our `k/2`).
+/// Bending is `B/2 * integral |d2r/du2|^2` along the warp (and likewise weft), in N m;
+/// twist is `T/2 * integral |d2r/du dv|^2`, in N m.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Material {
+    /// Areal density (kg/m^2).
+    pub density: f64,
+    /// Structural (warp/weft edge) spring stiffness (N/m).
+    pub stretch: f64,
+    /// Shear (diagonal) spring stiffness (N/m).
+    pub shear: f64,
+    /// Skip-one spring stiffness (N/m), used by the `skip_one` effect.
+    pub skip_one: f64,
+    /// Bending rigidity along the warp (u) direction (N m).
+    pub bend_warp: f64,
+    /// Bending rigidity along the weft (v) direction (N m).
+    pub bend_weft: f64,
+    /// Twist rigidity (mixed derivative) (N m).
+    pub twist: f64,
+    pub damping: Damping,
+    /// Collision thickness (m).
+    pub thickness: f64,
+    /// Coulomb friction coefficient against obstacles and itself.
+    pub friction: f64,
+}
+
+impl Default for Material {
+    /// A cotton-like sheet.
+    fn default() -> Self {
+        Self {
+            density: 0.2,
+            stretch: 1000.0,
+            shear: 100.0,
+            skip_one: 0.0,
+            bend_warp: 1e-4,
+            bend_weft: 1e-4,
+            twist: 1e-5,
+            damping: Damping {
+                spring: 0.05,
+                air: 0.05,
+                diffusion: 0.0,
+            },
+            thickness: 0.005,
+            friction: 0.3,
+        }
+    }
+}

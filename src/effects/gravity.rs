@@ -1,0 +1,37 @@
+//! Uniform gravity.
+
+use super::{Effect, State};
+use crate::Vec3;
+
+pub struct Gravity {
+    pub g: Vec3,
+    mass: Vec<f64>,
+}
+
+impl Gravity {
+    pub fn new(g: Vec3, mass: &[f64]) -> Self {
+        Self {
+            g,
+            mass: mass.to_vec(),
+        }
+    }
+}
+
+impl Effect for Gravity {
+    fn name(&self) -> &'static str {
+        "gravity"
+    }
+
+    fn add_forces(&self, _s: &State, f: &mut [Vec3]) {
+        for (fi, m) in f.iter_mut().zip(&self.mass) {
+            *fi += self.g * *m;
+        }
+    }
+
+    fn energy(&self, x: &[Vec3]) -> f64 {
+        -x.iter()
+            .zip(&self.mass)
+            .map(|(xi, m)| m * self.g.dot(*xi))
+            .sum::<f64>()
+    }
+}

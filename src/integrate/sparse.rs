@@ -1,0 +1,179 @@
+//! A symmetric-pattern sparse matrix of 3x3 blocks (block CSR), the implicit solver's system matrix.
+//!
+//! The pattern is fixed when the simulation is built (from the pairs every effect couples), so
+//! assembling a step only overwrites values; no allocation happens per step.
+
+use crate::{Mat3, Vec3};
+use rayon::prelude::*;
+
+/// Rows this large or larger are multiplied in parallel.
+const PAR_ROWS: usize = 2048;
+
+/// Collects the vertex pairs a set of effects couples.
+#[derive(Debug, Default, Clone)]
+pub struct PatternBuilder {
+    pairs: Vec<(u32, u32)>,
+}
+
+impl PatternBuilder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Declares that vertices `i` and `j` interact (both orders are added).
+    pub fn couple(&mut self, i: u32, j: u32) {
+        if i != j {
+            self.pairs.push((i, j));
+            self.pairs.push((j, i));
+        }
+    }
+
+    /// Declares a clique of mutually interacting vertices.
+    pub fn couple_all(&mut self, idx: &[u32]) {
+        for (a, &i) in idx.iter().enumerate() {
+            for &j in &idx[a + 1..] {
+                self.couple(i, j);
+            }
+        }
+    }
+
+    /// Builds the pattern for `n` vertices; the diagonal is always present.
+    pub fn build(mut self, n: usize) -> BlockCsr {
+        self.pairs.extend((0..n as u32).map(|i| (i, i)));
+        self.pairs.sort_unstable();
+        self.pairs.dedup();
+        let mut row_start = vec![0usize; n + 1];
+        for &(i, _) in &self.pairs {
+            row_start[i as usize + 1] += 1;
+        }
+        for r in 0..n {
+            row_start[r + 1] += row_start[r];
+        }
+        let cols: Vec<u32> = self.pairs.iter().map(|&(_, j)| j).collect();
+        let diag = (0..n)
+            .map(|r| {
+                let row = &cols[row_start[r]..row_start[r + 1]];
+                row_start[r] + row.binary_search(&(r as u32)).unwrap_or(0)
+            })
+            .collect();
+        BlockCsr {
+            vals: vec![Mat3::ZERO; cols.len()],
+            row_start,
+            cols,
+            diag,
+        }
+    }
+}
+
+/// Block CSR matrix.
+#[derive(Debug, Clone)]
+pub struct BlockCsr {
+    row_start: Vec<usize>,
+    cols: Vec<u32>,
+    diag: Vec<usize>,
+    vals: Vec<Mat3>,
+}
+
+impl BlockCsr {
+    pub fn rows(&self) -> usize {
+        self.row_start.len() - 1
+    }
+
+    pub fn nnz_blocks(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Index of block (i, j) in the value array. Panics if the pair was not declared: that is a bug
+    /// in an effect (it must declare every pair it adds to), not a user error.
+    #[inline]
+    pub fn slot(&self, i: u32, j: u32) -> usize {
+        if i == j {
+            return self.diag[i as usize];
+        }
+        let (s, e) = (self.row_start[i as usize], self.row_start[i as usize + 1]);
+        match self.cols[s..e].binary_search(&j) {
+            Ok(k) => s + k,
+            Err(_) => panic!("block ({i}, {j}) missing from the sparsity pattern"),
+        }
+    }
+
+    #[inline]
+    pub fn add(&mut self, i: u32, j: u32, m: Mat3) {
+        let s = self.slot(i, j);
+        self.vals[s] += m;
+    }
+
+    #[inline]
+    pub fn add_at(&mut self, slot: usize, m: Mat3) {
+        self.vals[slot] += m;
+    }
+
+    pub fn diagonal(&self, i: usize) -> Mat3 {
+        self.vals[self.diag[i]]
+    }
+
+    pub fn clear(&mut self) {
+        self.vals.iter_mut().for_each(|v| *v = Mat3::ZERO);
+    }
+
+    /// Sets `self = a * self + b * other` (same pattern).
+    pub fn axpby(&mut self, a: f64, b: f64, other: &BlockCsr) {
+        debug_assert_eq!(self.cols.len(), other.cols.len());
+        for (s, o) in self.vals.iter_mut().zip(&other.vals) {
+            *s = *s * a + *o * b;
+        }
+    }
+
+    /// Adds `d[i] * I` to each diagonal block.
+    pub fn add_diagonal(&mut self, d: &[f64]) {
+        for (i, &di) in d.iter().enumerate() {
+            self.vals[self.diag[i]] += Mat3::from_diagonal(Vec3::splat(di));
+        }
+    }
+
+    fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
+        let mut acc = Vec3::ZERO;
+        for k in self.row_start[r]..self.row_start[r + 1] {
+            acc += self.vals[k] * x[self.cols[k] as usize];
+        }
+        acc
+    }
+
+    /// `y = A x`.
+    pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
+        if y.len() >= PAR_ROWS {
+            y.par_iter_mut()
+                .enumerate()
+                .with_min_len(512)
+                .for_each(|(r, yr)| *yr = self.row_times(r, x));
+        } else {
+            for (r, yr) in y.iter_mut().enumerate() {
+                *yr = self.row_times(r, x);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn multiply_matches_dense() {
+        let mut p = PatternBuilder::new();
+        p.couple(0, 2);
+        p.couple(1, 2);
+        let mut m = p.build(3);
+        let a = Mat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 10.]);
+        m.add(0, 2, a);
+        m.add(2, 0, a.transpose());
+        m.add(1, 1, Mat3::IDENTITY * 3.0);
+        let x = [Vec3::new(1., 0., 0.), Vec3::new(0., 1., 0.), Vec3::new(1., 1., 1.)];
+        let mut y = [Vec3::ZERO; 3];
+        m.mul(&x, &mut y);
+        assert_eq!(y[0], a * x[2]);
+        assert_eq!(y[1], Vec3::new(0., 3., 0.));
+        assert_eq!(y[2], a.transpose() * x[0]);
+        assert_eq!(m.nnz_blocks(), 5);
+    }
+}
