@@ -125,7 +125,9 @@ impl Panel {
         }
         for (k, t) in triangles.iter().enumerate() {
             if t.iter().any(|&i| i as usize >= positions.len()) {
-                return Err(format!("panel {name}: triangle {k} indexes a missing vertex"));
+                return Err(format!(
+                    "panel {name}: triangle {k} indexes a missing vertex"
+                ));
             }
         }
         Ok(Panel {

@@ -83,14 +83,21 @@ pub fn springs(piece: &Piece, kind: SpringKind) -> Vec<Spring> {
         // A free triangle mesh resists shear through its own edges; skip-one needs a lattice.
         (None, _) => Vec::new(),
     };
-    pairs.into_iter().map(|(a, b)| spring(piece, a, b)).collect()
+    pairs
+        .into_iter()
+        .map(|(a, b)| spring(piece, a, b))
+        .collect()
 }
 
 /// Second-difference stencils along the warp (`along_u = true`) or the weft.
 pub fn bending_stencils(piece: &Piece, along_u: bool) -> Vec<Stencil<3>> {
     match &piece.panel.lattice {
         Some(l) => {
-            let (h, area) = if along_u { (l.du, l.du * l.dv) } else { (l.dv, l.du * l.dv) };
+            let (h, area) = if along_u {
+                (l.du, l.du * l.dv)
+            } else {
+                (l.dv, l.du * l.dv)
+            };
             let s = area.sqrt() / (h * h);
             let (di, dj) = if along_u { (1, 0) } else { (0, 1) };
             let mut out = Vec::new();
@@ -122,9 +129,12 @@ pub fn twist_stencils(piece: &Piece) -> Vec<Stencil<4>> {
     let mut out = Vec::new();
     for j in 0..l.nv as isize - 1 {
         for i in 0..l.nu as isize - 1 {
-            let (Some(a), Some(b), Some(c), Some(d)) =
-                (l.at(i, j), l.at(i + 1, j), l.at(i, j + 1), l.at(i + 1, j + 1))
-            else {
+            let (Some(a), Some(b), Some(c), Some(d)) = (
+                l.at(i, j),
+                l.at(i + 1, j),
+                l.at(i, j + 1),
+                l.at(i + 1, j + 1),
+            ) else {
                 continue;
             };
             out.push(Stencil {

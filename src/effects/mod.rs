@@ -172,8 +172,11 @@ impl EffectSet {
 
     /// Stiffness bounds of every elastic effect, stiffest first.
     pub fn stiffness(&self, mass: &[f64]) -> Vec<StiffnessBound> {
-        let mut b: Vec<StiffnessBound> =
-            self.effects.iter().filter_map(|e| e.stiffness(mass)).collect();
+        let mut b: Vec<StiffnessBound> = self
+            .effects
+            .iter()
+            .filter_map(|e| e.stiffness(mass))
+            .collect();
         b.sort_by(|a, b| b.omega_sq.total_cmp(&a.omega_sq));
         b
     }

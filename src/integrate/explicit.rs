@@ -16,7 +16,14 @@ impl Integrator for ExplicitEuler {
         "explicit_euler"
     }
 
-    fn step(&mut self, d: &Dynamics, t: f64, h: f64, x: &mut [Vec3], v: &mut [Vec3]) -> IntegratorStats {
+    fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
         scratch(&mut self.f, x.len());
         scratch(&mut self.a, x.len());
         d.accelerations(t, x, v, &mut self.f, &mut self.a);
@@ -49,7 +56,14 @@ impl Integrator for SymplecticEuler {
         "symplectic_euler"
     }
 
-    fn step(&mut self, d: &Dynamics, t: f64, h: f64, x: &mut [Vec3], v: &mut [Vec3]) -> IntegratorStats {
+    fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
         scratch(&mut self.f, x.len());
         scratch(&mut self.a, x.len());
         d.accelerations(t, x, v, &mut self.f, &mut self.a);

@@ -80,7 +80,14 @@ impl Integrator for Implicit {
         self.a = Some(m);
     }
 
-    fn step(&mut self, d: &Dynamics, t: f64, h: f64, x: &mut [Vec3], v: &mut [Vec3]) -> IntegratorStats {
+    fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
         let n = x.len();
         if self.a.as_ref().is_none_or(|a| a.rows() != n) {
             self.prepare(d.effects, n);

@@ -116,7 +116,14 @@ pub trait Integrator: Send {
     /// Called once when the simulation is built (and again if the effects change).
     fn prepare(&mut self, _effects: &EffectSet, _n: usize) {}
 
-    fn step(&mut self, d: &Dynamics, t: f64, h: f64, x: &mut [Vec3], v: &mut [Vec3]) -> IntegratorStats;
+    fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats;
 
     /// Largest stable `h * omega` for an undamped oscillator, if the method has one.
     fn stability_limit(&self) -> Option<f64> {

@@ -17,7 +17,14 @@ impl Integrator for Rk4 {
         "rk4"
     }
 
-    fn step(&mut self, d: &Dynamics, t: f64, h: f64, x: &mut [Vec3], v: &mut [Vec3]) -> IntegratorStats {
+    fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
         let n = x.len();
         scratch(&mut self.f, n);
         scratch(&mut self.xs, n);
@@ -39,11 +46,19 @@ impl Integrator for Rk4 {
                 }
             }
             self.kx[stage].copy_from_slice(&self.vs);
-            d.accelerations(t + c[stage] * h, &self.xs, &self.vs, &mut self.f, &mut self.kv[stage]);
+            d.accelerations(
+                t + c[stage] * h,
+                &self.xs,
+                &self.vs,
+                &mut self.f,
+                &mut self.kv[stage],
+            );
         }
         for i in 0..n {
-            x[i] += (self.kx[0][i] + self.kx[1][i] * 2.0 + self.kx[2][i] * 2.0 + self.kx[3][i]) * (h / 6.0);
-            v[i] += (self.kv[0][i] + self.kv[1][i] * 2.0 + self.kv[2][i] * 2.0 + self.kv[3][i]) * (h / 6.0);
+            x[i] += (self.kx[0][i] + self.kx[1][i] * 2.0 + self.kx[2][i] * 2.0 + self.kx[3][i])
+                * (h / 6.0);
+            v[i] += (self.kv[0][i] + self.kv[1][i] * 2.0 + self.kv[2][i] * 2.0 + self.kv[3][i])
+                * (h / 6.0);
         }
         IntegratorStats {
             force_evaluations: 4,

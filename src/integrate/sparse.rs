@@ -168,7 +168,11 @@ mod tests {
         m.add(0, 2, a);
         m.add(2, 0, a.transpose());
         m.add(1, 1, Mat3::IDENTITY * 3.0);
-        let x = [Vec3::new(1., 0., 0.), Vec3::new(0., 1., 0.), Vec3::new(1., 1., 1.)];
+        let x = [
+            Vec3::new(1., 0., 0.),
+            Vec3::new(0., 1., 0.),
+            Vec3::new(1., 1., 1.),
+        ];
         let mut y = [Vec3::ZERO; 3];
         m.mul(&x, &mut y);
         assert_eq!(y[0], a * x[2]);

@@ -1,1 +1,313 @@
-//! scene (placeholder)
+//! The scene file: the single description of a run, used alike by `drape record`, the live node,
+//! the benchmarks and the study. YAML, parsed with serde; unknown keys are errors.
+//!
+//! ```yaml
+//! effects: [gravity, stretch, shear, bending, damping]   # only these are built
+//! solver: { integrator: implicit, dt: 0.0166667 }
+//! cloths:
+//!   - name: towel
+//!     grid: { size: [1.0, 1.0], resolution: [32, 32], pose: { xyz: [0, 0, 1] } }
+//!     pins: [ { region: top_left }, { region: top_right } ]
+//! ```
+
+mod build;
+mod validate;
+
+pub use build::build;
+
+use crate::cloth::{GridRegion, Material};
+use crate::effects::{Gust, WindKey};
+use crate::integrate::{ImplicitSettings, IntegratorKind};
+use crate::sim::GuardSettings;
+use crate::{Pose, Vec3};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// An effect a scene can ask for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    Gravity,
+    /// Structural springs along warp and weft edges.
+    Stretch,
+    /// Diagonal springs.
+    Shear,
+    /// Springs between second neighbours along warp and weft.
+    SkipOne,
+    /// Second derivative along warp and along weft (separate rigidities).
+    Bending,
+    /// Mixed second derivative.
+    Twist,
+    Wind,
+    /// Spring damping, air drag and velocity diffusion (per the material's `damping`).
+    Damping,
+}
+
+/// A pose as written in scene files: translation and URDF-style roll-pitch-yaw (radians).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PoseSpec {
+    pub xyz: [f64; 3],
+    pub rpy: [f64; 3],
+}
+
+impl PoseSpec {
+    pub fn pose(&self) -> Pose {
+        Pose::from_xyz_rpy(self.xyz, self.rpy)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    pub integrator: IntegratorKind,
+    /// Frame step (s).
+    pub dt: f64,
+    #[serde(default = "one")]
+    pub substeps: u32,
+    #[serde(default = "ImplicitSettings::default_tolerance")]
+    pub cg_tolerance: f64,
+    #[serde(default = "ImplicitSettings::default_iterations")]
+    pub cg_max_iterations: u32,
+    #[serde(default)]
+    pub guard: GuardSettings,
+}
+
+fn one() -> u32 {
+    1
+}
+
+impl ImplicitSettings {
+    fn default_tolerance() -> f64 {
+        ImplicitSettings::default().cg_tolerance
+    }
+    fn default_iterations() -> u32 {
+        ImplicitSettings::default().cg_max_iterations
+    }
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            integrator: IntegratorKind::Implicit,
+            dt: 1.0 / 60.0,
+            substeps: 1,
+            cg_tolerance: ImplicitSettings::default().cg_tolerance,
+            cg_max_iterations: ImplicitSettings::default().cg_max_iterations,
+            guard: GuardSettings::default(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    /// Constant wind velocity (m/s).
+    #[serde(default)]
+    pub velocity: Vec3,
+    /// Scripted offsets over time, interpolated linearly.
+    #[serde(default)]
+    pub keys: Vec<WindKey>,
+    #[serde(default)]
+    pub gusts: Vec<Gust>,
+    #[serde(default = "air_density")]
+    pub air_density: f64,
+    #[serde(default = "one_f")]
+    pub drag_coefficient: f64,
+}
+
+fn air_density() -> f64 {
+    1.2
+}
+fn one_f() -> f64 {
+    1.0
+}
+
+/// A rectangular grid of cloth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Extent along warp (u) and weft (v), metres.
+    pub size: [f64; 2],
+    /// Vertices along u and v.
+    pub resolution: [usize; 2],
+    /// Where the grid's centre sits; the grid spans the local x (u) - y (v) plane.
+    #[serde(default)]
+    pub pose: PoseSpec,
+}
+
+/// A set of vertices of one cloth. Exactly one of the fields is given, e.g. `{ region: top_left }`,
+/// `{ vertices: [0, 5] }` or `{ near: { point: [0, 0, 1], radius: 0.05 } }`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Selection {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<GridRegion>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near: Option<Near>,
+}
+
+/// Vertices within `radius` of `point` (world frame, at the initial placement).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Near {
+    pub point: [f64; 3],
+    pub radius: f64,
+}
+
+/// Vertices attached to a moving frame: `{ frame: handle, region: top_left }`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AttachSpec {
+    /// Name of a frame in the scene's `frames`.
+    pub frame: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<GridRegion>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near: Option<Near>,
+}
+
+impl AttachSpec {
+    pub fn selection(&self) -> Selection {
+        Selection {
+            vertex: self.vertex,
+            vertices: self.vertices.clone(),
+            region: self.region,
+            near: self.near,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClothSpec {
+    pub name: String,
+    pub grid: GridSpec,
+    #[serde(default)]
+    pub material: Material,
+    #[serde(default)]
+    pub pins: Vec<Selection>,
+    #[serde(default)]
+    pub attach: Vec<AttachSpec>,
+}
+
+/// A named moving frame that cloth can attach to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameSpec {
+    pub name: String,
+    #[serde(default)]
+    pub pose: PoseSpec,
+    /// Constant linear velocity (m/s) of the frame's origin.
+    #[serde(default)]
+    pub linear_velocity: [f64; 3],
+    /// Constant angular velocity (rad/s) about the frame's origin, world axes.
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+}
+
+impl FrameSpec {
+    pub fn pose_at(&self, t: f64) -> Pose {
+        let p0 = self.pose.pose();
+        let w = Vec3::from(self.angular_velocity) * t;
+        let rot = glam::DQuat::from_scaled_axis(w) * p0.rotation;
+        Pose::new(
+            p0.translation + Vec3::from(self.linear_velocity) * t,
+            rot.normalize(),
+        )
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub name: String,
+    /// Default run length for `drape record` (s).
+    #[serde(default = "duration")]
+    pub duration: f64,
+    /// Output rate of meshes (Hz).
+    #[serde(default = "publish_rate")]
+    pub publish_rate: f64,
+    #[serde(default = "gravity")]
+    pub gravity: [f64; 3],
+    pub effects: Vec<EffectKind>,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default)]
+    pub wind: Option<WindSpec>,
+    #[serde(default)]
+    pub frames: Vec<FrameSpec>,
+    pub cloths: Vec<ClothSpec>,
+}
+
+fn duration() -> f64 {
+    5.0
+}
+fn publish_rate() -> f64 {
+    30.0
+}
+fn gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+/// A scene that could not be read or makes no sense; says where and why.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{origin}: {message}")]
+    Parse { origin: String, message: String },
+    #[error("{origin}: {key}: {reason}")]
+    Invalid {
+        origin: String,
+        key: String,
+        reason: String,
+    },
+}
+
+impl Scene {
+    /// Parses and validates a scene from YAML text; `origin` names it in errors.
+    pub fn from_yaml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = serde_yaml_ng::from_str(text).map_err(|e| SceneError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        scene
+            .validate()
+            .map_err(|(key, reason)| SceneError::Invalid {
+                origin: origin.to_string(),
+                key,
+                reason,
+            })?;
+        Ok(scene)
+    }
+
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_yaml(&text, &path.display().to_string())
+    }
+
+    pub fn has(&self, e: EffectKind) -> bool {
+        self.effects.contains(&e)
+    }
+
+    /// Builds the simulation this scene describes.
+    pub fn build(&self) -> Result<crate::sim::Simulation, SceneError> {
+        build(self)
+    }
+}

@@ -45,7 +45,10 @@ pub enum Symptom {
     NonFinite,
     Speed(f64),
     /// Energy gained beyond the external work, in joules.
-    EnergyGain { gained: f64, allowed: f64 },
+    EnergyGain {
+        gained: f64,
+        allowed: f64,
+    },
 }
 
 /// A simulation that diverged and could not be rescued by the policy.
@@ -85,7 +88,11 @@ impl fmt::Display for DivergenceError {
                 b.parameter, h_omega
             )?;
             if let Some(limit) = self.stability_limit {
-                write!(f, ", stability limit of {} is {:.3}", self.integrator, limit)?;
+                write!(
+                    f,
+                    ", stability limit of {} is {:.3}",
+                    self.integrator, limit
+                )?;
             }
             write!(
                 f,
