@@ -110,6 +110,11 @@ pub struct Simulation {
     /// Dynamic energy of the last substeps: the guard's reference level, so that the bounded
     /// energy oscillation of a stable symplectic step is not mistaken for a blow-up.
     recent_energy: [f64; 16],
+    /// Upper bound of the total energy the cloth may have by now: its initial energy plus all the
+    /// work done on it from outside (and the allowed integration error). `None` until first set.
+    energy_budget: Option<f64>,
+    /// Scale of the budget's slack: initial dynamic energy plus the allowances spent.
+    budget_scale: f64,
     substep_count: usize,
     // Scratch buffers.
     x_save: Vec<Vec3>,
@@ -138,6 +143,8 @@ impl Simulation {
             time: 0.0,
             energy_cache: None,
             recent_energy: [0.0; 16],
+            energy_budget: None,
+            budget_scale: 0.0,
             substep_count: 0,
             x_save: Vec::new(),
             v_save: Vec::new(),
@@ -270,7 +277,12 @@ impl Simulation {
 
         // 3. Guard.
         match self.check(h, e0, w_ext.as_deref()) {
-            Ok(e1) => {
+            Ok((e1, spent)) => {
+                if self.energy_budget.is_none() {
+                    self.budget_scale = e0.1;
+                }
+                self.energy_budget = Some(self.energy_budget.unwrap_or(e0.0) + spent);
+                self.budget_scale += spent;
                 self.energy_cache = Some(e1);
                 self.recent_energy[self.substep_count % 16] = e1.1;
                 self.substep_count += 1;
@@ -346,12 +358,13 @@ impl Simulation {
     /// vertices, plus `energy_growth` times the recent peak dynamic energy, plus the first-order
     /// error an explicit step makes under gravity (`h sum m |g| |v|`). An instability multiplies the
     /// dynamic energy every step and trips this within a few steps; a stable step never comes close.
+    #[allow(clippy::type_complexity)]
     fn check(
         &self,
         h: f64,
         e0: (f64, f64),
         fext: Option<&[Vec3]>,
-    ) -> Result<(f64, f64), (usize, Symptom)> {
+    ) -> Result<((f64, f64), f64), (usize, Symptom)> {
         let c = &self.cloth;
         let g = &self.settings.guard;
         for i in 0..c.len() {
@@ -391,7 +404,24 @@ impl Simulation {
         if gained > allowed {
             return Err((fastest, Symptom::EnergyGain { gained, allowed }));
         }
-        Ok(e1)
+        let spent = work + gravity_error + floor;
+        let budget = self.energy_budget.unwrap_or(e0.0) + spent;
+        let scale = if self.energy_budget.is_some() {
+            self.budget_scale
+        } else {
+            e0.1
+        } + spent;
+        let over = e1.0 - budget;
+        if over > g.energy_growth * scale + floor {
+            return Err((
+                fastest,
+                Symptom::EnergyGain {
+                    gained: over,
+                    allowed: g.energy_growth * scale,
+                },
+            ));
+        }
+        Ok((e1, spent))
     }
 
     fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
