@@ -58,9 +58,11 @@ pub fn validate(yaml: &str) -> Result<(), String> {
         for key in ["history", "reliability", "durability", "liveliness"] {
             match map.get(key) {
                 Some(Value::Number(_)) => {}
-                Some(other) => return Err(format!(
+                Some(other) => {
+                    return Err(format!(
                     "profile {i}: `{key}` must be an rmw enum integer (Humble form), got {other:?}"
-                )),
+                ))
+                }
                 None => return Err(format!("profile {i}: missing `{key}`")),
             }
         }
