@@ -3,7 +3,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use drape::ros::msg::{ColorRGBA, Marker, PointCloud2, Time};
-use drape::ros::{mesh_marker, point_cloud, BagWriter, Distro};
+use drape::ros::{cdr, mesh_marker, point_cloud, BagWriter, Distro};
 use drape::Vec3;
 use std::hint::black_box;
 
@@ -52,6 +52,26 @@ fn bench_frame(c: &mut Criterion) {
         })
     });
 
+    let marker = mesh_marker(
+        Distro::Jazzy,
+        Time::default(),
+        "world",
+        "cloth",
+        &pos,
+        &tris,
+        color,
+    );
+    let cloud = point_cloud(Time::default(), "world", &pos, &nrm);
+    let mut buf = Vec::new();
+    c.bench_function("cdr_encode_64x64", |b| {
+        b.iter(|| {
+            cdr::encode_into(&marker, &mut buf).expect("encode marker");
+            let n = buf.len();
+            cdr::encode_into(&cloud, &mut buf).expect("encode cloud");
+            black_box(n + buf.len())
+        })
+    });
+
     let mut bag = BagWriter::create(dir.path().join("bench.mcap")).expect("bag");
     let marker_t = bag
         .add_topic::<Marker>("/cloth/marker", Distro::Jazzy, None)
@@ -71,6 +91,14 @@ fn bench_frame(c: &mut Criterion) {
         })
     });
     bag.finish().expect("finish");
+    let frames = t_ns / 33_333_333;
+    let bytes = std::fs::metadata(dir.path().join("bench.mcap")).map_or(0, |m| m.len());
+    eprintln!(
+        "bag: {frames} frames, {:.0} kB per frame on disk (uncompressed CDR {} kB)",
+        bytes as f64 / frames.max(1) as f64 / 1e3,
+        (cdr::encode(&marker).map_or(0, |v| v.len()) + cdr::encode(&cloud).map_or(0, |v| v.len()))
+            / 1000
+    );
 }
 
 criterion_group!(benches, bench_frame);
