@@ -50,3 +50,58 @@ pub fn decode<M: DeserializeOwned>(payload: &[u8]) -> Result<M, CdrError> {
     };
     Ok(msg)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ros::msg::{Header, JointState, PointCloud2, Time};
+    use proptest::prelude::*;
+
+    #[test]
+    fn rejects_short_and_foreign_payloads() {
+        assert!(matches!(
+            decode::<Time>(&[0, 1]),
+            Err(CdrError::TooShort(2))
+        ));
+        // 0x0003 is PL_CDR_LE (parameter list), which ROS 2 does not use for messages.
+        assert!(matches!(
+            decode::<Time>(&[0, 3, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0]),
+            Err(CdrError::Encapsulation(0, 3))
+        ));
+        assert!(matches!(
+            decode::<Time>(&[0, 1, 0, 0, 1, 0]),
+            Err(CdrError::Body(_))
+        ));
+    }
+
+    #[test]
+    fn decodes_big_endian_payloads() {
+        let be = [0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 2];
+        assert_eq!(decode::<Time>(&be).unwrap(), Time { sec: 1, nanosec: 2 });
+    }
+
+    proptest! {
+        #[test]
+        fn joint_state_round_trips(
+            frame in "[a-z_/]{0,12}",
+            names in proptest::collection::vec("[a-z0-9_]{0,9}", 0..5),
+            pos in proptest::collection::vec(-1e3f64..1e3, 0..5),
+            vel in proptest::collection::vec(-1e3f64..1e3, 0..3),
+            sec in any::<i32>(), nanosec in 0u32..1_000_000_000,
+        ) {
+            let js = JointState {
+                header: Header::new(Time { sec, nanosec }, &frame),
+                name: names, position: pos, velocity: vel, effort: vec![],
+            };
+            let bytes = encode(&js).unwrap();
+            prop_assert_eq!(decode::<JointState>(&bytes).unwrap(), js);
+        }
+
+        #[test]
+        fn cloud_bytes_round_trip(data in proptest::collection::vec(any::<u8>(), 0..200), dense: bool) {
+            let cloud = PointCloud2 { width: data.len() as u32, data, is_dense: dense, ..PointCloud2::default() };
+            let bytes = encode(&cloud).unwrap();
+            prop_assert_eq!(decode::<PointCloud2>(&bytes).unwrap(), cloud);
+        }
+    }
+}
