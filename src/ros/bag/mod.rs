@@ -1,0 +1,10 @@
+//! rosbag2-compatible MCAP files: writing any [`RosMessage`](super::msg::RosMessage),
+//! reading typed messages back (e.g. `/joint_states` to drive a robot).
+
+mod error;
+mod read;
+mod write;
+
+pub use error::BagError;
+pub use read::{read_joint_states, read_topic, TopicRead};
+pub use write::{BagWriter, TopicId};

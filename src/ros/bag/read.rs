@@ -1,0 +1,161 @@
+//! Reading typed messages of one topic back from a rosbag2 MCAP file.
+
+use super::BagError;
+use crate::ros::cdr;
+use crate::ros::msg::{JointState, RosMessage};
+use serde::de::DeserializeOwned;
+use std::path::Path;
+
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+/// The messages of one topic, in file order, with what had to be skipped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopicRead<M> {
+    /// `(log_time_ns, message)`.
+    pub messages: Vec<(u64, M)>,
+    /// Messages on the topic whose CDR payload did not decode.
+    pub skipped: usize,
+    /// Set when the file ends early or is corrupt after some records (e.g. a recorder
+    /// killed before finishing); the messages before that point are kept.
+    pub truncated: Option<String>,
+}
+
+/// Reads every `M` on `topic`. Fails on a missing or non-MCAP file, a missing topic or
+/// one of another type; skips (and counts) individual messages that do not decode.
+pub fn read_topic<M: RosMessage + DeserializeOwned>(
+    path: impl AsRef<Path>,
+    topic: &str,
+) -> Result<TopicRead<M>, BagError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| BagError::Open {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !bytes.starts_with(MCAP_MAGIC) {
+        return Err(BagError::NotMcap {
+            path: path.to_path_buf(),
+        });
+    }
+    let options = mcap::read::Options::IgnoreEndMagic.into();
+    let stream = mcap::MessageStream::new_with_options(&bytes, options).map_err(|source| {
+        BagError::Mcap {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
+
+    let mut topics: Vec<(String, String, String)> = Vec::new(); // topic, type, encoding
+    let mut read = TopicRead {
+        messages: Vec::new(),
+        skipped: 0,
+        truncated: None,
+    };
+    for item in stream {
+        let message = match item {
+            Ok(m) => m,
+            Err(e) if topics.is_empty() => {
+                return Err(BagError::Mcap {
+                    path: path.to_path_buf(),
+                    source: e,
+                })
+            }
+            Err(e) => {
+                read.truncated = Some(e.to_string());
+                break;
+            }
+        };
+        let channel = &message.channel;
+        if !topics.iter().any(|t| t.0 == channel.topic) {
+            let type_name = channel
+                .schema
+                .as_ref()
+                .map_or_else(String::new, |s| s.name.clone());
+            topics.push((
+                channel.topic.clone(),
+                type_name,
+                channel.message_encoding.clone(),
+            ));
+        }
+        if channel.topic != topic {
+            continue;
+        }
+        let type_ok = channel
+            .schema
+            .as_ref()
+            .is_some_and(|s| s.name == M::TYPE_NAME);
+        if !type_ok || channel.message_encoding != "cdr" {
+            return Err(type_error::<M>(path, topic, &topics));
+        }
+        match cdr::decode::<M>(&message.data) {
+            Ok(m) => read.messages.push((message.log_time, m)),
+            Err(e) => {
+                log::debug!(
+                    "{}: skipping message {} on {topic}: {e}",
+                    path.display(),
+                    message.sequence
+                );
+                read.skipped += 1;
+            }
+        }
+    }
+    if read.messages.is_empty() && read.skipped == 0 && !topics.iter().any(|t| t.0 == topic) {
+        let mut available: Vec<&str> = topics.iter().map(|t| t.0.as_str()).collect();
+        available.sort_unstable();
+        return Err(BagError::NoSuchTopic {
+            path: path.to_path_buf(),
+            topic: topic.to_string(),
+            available: if available.is_empty() {
+                "none with messages".to_string()
+            } else {
+                available.join(", ")
+            },
+        });
+    }
+    Ok(read)
+}
+
+fn type_error<M: RosMessage>(
+    path: &Path,
+    topic: &str,
+    topics: &[(String, String, String)],
+) -> BagError {
+    let (found, encoding) = topics
+        .iter()
+        .find(|t| t.0 == topic)
+        .map(|t| (t.1.clone(), t.2.clone()))
+        .unwrap_or_default();
+    BagError::TopicType {
+        path: path.to_path_buf(),
+        topic: topic.to_string(),
+        found: if found.is_empty() {
+            "(no schema)".to_string()
+        } else {
+            found
+        },
+        encoding,
+        expected: M::TYPE_NAME.to_string(),
+    }
+}
+
+/// The `/joint_states` messages of a rosbag2 MCAP file as `(log_time_ns, JointState)`.
+/// Undecodable messages are skipped and a truncated file is read up to the damage;
+/// both are reported with `log::warn!`.
+pub fn read_joint_states(path: impl AsRef<Path>) -> Result<Vec<(u64, JointState)>, BagError> {
+    let path = path.as_ref();
+    let read = read_topic::<JointState>(path, "/joint_states")?;
+    if read.skipped > 0 {
+        log::warn!(
+            "{}: skipped {} malformed /joint_states messages",
+            path.display(),
+            read.skipped
+        );
+    }
+    if let Some(reason) = &read.truncated {
+        log::warn!(
+            "{}: file is truncated or corrupt ({reason}); read {} /joint_states messages before it",
+            path.display(),
+            read.messages.len()
+        );
+    }
+    Ok(read.messages)
+}
