@@ -1,1 +1,156 @@
-fn main() {}
+//! The `drape` command line.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "drape", version, about = "Cloth simulation on robots")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene offline and record the cloth to a rosbag2 MCAP file.
+    #[cfg(feature = "ros")]
+    Record {
+        /// Scene file (YAML).
+        #[arg(long)]
+        scene: PathBuf,
+        /// Output bag (.mcap).
+        #[arg(long)]
+        out: PathBuf,
+        /// Simulated seconds (default: the scene's duration).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Marker layout: humble or jazzy (default: $ROS_DISTRO, else jazzy).
+        #[arg(long)]
+        distro: Option<String>,
+        /// Frame id of the published cloth.
+        #[arg(long, default_value = "world")]
+        frame_id: String,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Parse and validate a scene, and print what it builds.
+    Check {
+        #[arg(long)]
+        scene: PathBuf,
+    },
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info")).init();
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("drape: error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        #[cfg(feature = "ros")]
+        Command::Record {
+            scene,
+            out,
+            duration,
+            distro,
+            frame_id,
+            quiet,
+        } => record(scene, out, duration, distro, frame_id, quiet),
+        Command::Check { scene } => {
+            let s = drape::scene::Scene::load(&scene)?;
+            let sim = s.build()?;
+            println!(
+                "{}: {} vertices, {} triangles, effects {:?}, integrator {}, dt {} s x {} substeps",
+                scene.display(),
+                sim.cloth.len(),
+                sim.cloth.triangles.len(),
+                sim.effects().names(),
+                sim.integrator_name(),
+                sim.settings.dt,
+                sim.settings.substeps
+            );
+            Ok(())
+        }
+    }
+}
+
+#[cfg(feature = "ros")]
+fn record(
+    scene_path: PathBuf,
+    out: PathBuf,
+    duration: Option<f64>,
+    distro: Option<String>,
+    frame_id: String,
+    quiet: bool,
+) -> Result<()> {
+    use drape::ros::record::{record, RecordOptions};
+    use drape::ros::Distro;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let scene = drape::scene::Scene::load(&scene_path)?;
+    let distro = match distro {
+        Some(d) => d
+            .parse::<Distro>()
+            .map_err(|e| anyhow::anyhow!("--distro: {e}"))?,
+        None => Distro::from_env().map_err(|e| anyhow::anyhow!("ROS_DISTRO: {e}"))?,
+    };
+    let opts = RecordOptions {
+        duration: duration.unwrap_or(scene.duration),
+        publish_rate: scene.publish_rate,
+        distro,
+        frame_id,
+        ..RecordOptions::default()
+    };
+    let mut sim = scene.build()?;
+
+    // Ctrl-C and SIGTERM ask the loop to stop; the bag is then finished, not cut.
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("cannot install the Ctrl-C handler")?;
+
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new((opts.duration * 1000.0).round() as u64)
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let start = sim.time();
+    let total = opts.duration;
+    let summary = record(&mut sim, &out, &opts, &stop, |t| {
+        bar.set_position(((t - start) * 1000.0) as u64);
+        bar.set_message(format!("{:.2}/{total:.2} s simulated", t - start));
+    })
+    .with_context(|| format!("recording {} to {}", scene_path.display(), out.display()))?;
+    bar.finish_and_clear();
+    println!(
+        "{}: {} frames, {:.2} s simulated in {} steps{}{}",
+        out.display(),
+        summary.frames_written,
+        summary.simulated_seconds,
+        summary.steps,
+        if summary.subdivisions > 0 {
+            format!(
+                ", {} substeps subdivided for stability",
+                summary.subdivisions
+            )
+        } else {
+            String::new()
+        },
+        if summary.interrupted {
+            " (interrupted, file finished)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}

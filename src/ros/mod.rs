@@ -8,6 +8,7 @@ pub mod convert;
 mod distro;
 pub mod msg;
 pub mod qos;
+pub mod record;
 
 pub use bag::{read_joint_states, read_topic, BagError, BagWriter, TopicId, TopicRead};
 pub use convert::{mesh_marker, point_cloud};
