@@ -77,7 +77,10 @@ fn parse_reference(text: &str) -> Vec<HashMap<String, Pose>> {
     let mut out: Vec<HashMap<String, Pose>> = Vec::new();
     for line in text.lines().filter(|l| !l.trim().is_empty()) {
         let mut it = line.split_whitespace();
-        let idx: usize = it.next().and_then(|s| s.parse().ok()).expect("config index");
+        let idx: usize = it
+            .next()
+            .and_then(|s| s.parse().ok())
+            .expect("config index");
         let link = it.next().expect("link name").to_string();
         let m: Vec<f64> = it.map(|s| s.parse().expect("number")).collect();
         assert_eq!(m.len(), 12, "bad reference line: {line}");
@@ -86,7 +89,10 @@ fn parse_reference(text: &str) -> Vec<HashMap<String, Pose>> {
             DVec3::new(m[1], m[5], m[9]),
             DVec3::new(m[2], m[6], m[10]),
         );
-        let pose = Pose::new(DVec3::new(m[3], m[7], m[11]), DQuat::from_mat3(&rot).normalize());
+        let pose = Pose::new(
+            DVec3::new(m[3], m[7], m[11]),
+            DQuat::from_mat3(&rot).normalize(),
+        );
         if out.len() <= idx {
             out.resize(idx + 1, HashMap::new());
         }
@@ -116,8 +122,15 @@ fn check_robot(urdf: &Path, seed: u64) {
     let (mut worst_m, mut worst_rad) = (0.0f64, 0.0f64);
     for (k, (_, q)) in configs.iter().enumerate() {
         let report = robot.link_poses_into(q, &mut poses);
-        assert!(report.is_clean(), "in-limit configuration reported {report:?}");
-        assert_eq!(reference[k].len(), robot.link_names().len(), "link sets differ");
+        assert!(
+            report.is_clean(),
+            "in-limit configuration reported {report:?}"
+        );
+        assert_eq!(
+            reference[k].len(),
+            robot.link_names().len(),
+            "link sets differ"
+        );
         for (li, name) in robot.link_names().iter().enumerate() {
             let want = reference[k]
                 .get(name)
@@ -125,7 +138,12 @@ fn check_robot(urdf: &Path, seed: u64) {
             let got = poses[li];
             let dm = (got.translation - want.translation).length();
             // 2 asin |vec(q1^-1 q2)| keeps full precision near zero (acos of the dot does not).
-            let drad = 2.0 * (got.rotation.inverse() * want.rotation).xyz().length().min(1.0).asin();
+            let drad = 2.0
+                * (got.rotation.inverse() * want.rotation)
+                    .xyz()
+                    .length()
+                    .min(1.0)
+                    .asin();
             worst_m = worst_m.max(dm);
             worst_rad = worst_rad.max(drad);
             assert!(
@@ -144,7 +162,10 @@ fn check_robot(urdf: &Path, seed: u64) {
 
 #[test]
 fn fk_matches_reference_panda() {
-    check_robot(&pybullet_data().join("franka_panda/panda.urdf"), 0x5eed_0001);
+    check_robot(
+        &pybullet_data().join("franka_panda/panda.urdf"),
+        0x5eed_0001,
+    );
 }
 
 #[test]
