@@ -335,13 +335,13 @@ fn read_mesh(mesh: &Element) -> Result<TriMeshData, String> {
         let mut polys: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
         match prim.name.as_str() {
             "triangles" => {
-                let p = indices(&prim.child("p").map(|p| p.text.as_str()).unwrap_or(""))?;
+                let p = indices(prim.child("p").map(|p| p.text.as_str()).unwrap_or(""))?;
                 let corners = p.len() / stride;
                 polys.push((vec![3; corners / 3], p));
             }
             "polylist" => {
-                let vcount = indices(&prim.child("vcount").map(|v| v.text.as_str()).unwrap_or(""))?;
-                let p = indices(&prim.child("p").map(|p| p.text.as_str()).unwrap_or(""))?;
+                let vcount = indices(prim.child("vcount").map(|v| v.text.as_str()).unwrap_or(""))?;
+                let p = indices(prim.child("p").map(|p| p.text.as_str()).unwrap_or(""))?;
                 polys.push((vcount, p));
             }
             _ => {

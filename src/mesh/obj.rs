@@ -10,7 +10,6 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let mut reader = std::io::BufReader::new(bytes);
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
