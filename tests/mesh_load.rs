@@ -51,7 +51,11 @@ fn binary_stl_is_merged_and_oriented() {
 #[test]
 fn binary_stl_whose_header_starts_with_solid_is_still_binary() {
     let dir = tempfile::tempdir().unwrap();
-    let p = write(dir.path(), "sw.STL", &binary_stl(b"solid exported by CAD", &TETRA));
+    let p = write(
+        dir.path(),
+        "sw.STL",
+        &binary_stl(b"solid exported by CAD", &TETRA),
+    );
     let m = load_mesh(&p, Vec3::ONE).unwrap();
     assert_eq!(m.indices.len(), 4);
 }
@@ -83,14 +87,20 @@ fn stl_header_claiming_four_billion_triangles_is_rejected() {
     let err = load_mesh(&p, Vec3::ONE).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, MeshError::Malformed { .. }), "{err:?}");
-    assert!(msg.contains("4294967295") && msg.contains("huge.stl"), "{msg}");
+    assert!(
+        msg.contains("4294967295") && msg.contains("huge.stl"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn truncated_stl_and_stl_with_nan_are_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "short.stl", b"tiny");
-    assert!(matches!(load_mesh(&p, Vec3::ONE), Err(MeshError::Malformed { .. })));
+    assert!(matches!(
+        load_mesh(&p, Vec3::ONE),
+        Err(MeshError::Malformed { .. })
+    ));
     let mut t = TETRA;
     t[3][1][0] = f32::NAN;
     let p = write(dir.path(), "nan.stl", &binary_stl(b"nan", &t));
@@ -98,7 +108,10 @@ fn truncated_stl_and_stl_with_nan_are_rejected() {
     assert!(matches!(err, MeshError::NonFinite { .. }), "{err:?}");
     assert!(err.to_string().contains("nan.stl"));
     let p = write(dir.path(), "empty.stl", &binary_stl(b"none", &[]));
-    assert!(matches!(load_mesh(&p, Vec3::ONE), Err(MeshError::Empty { .. })));
+    assert!(matches!(
+        load_mesh(&p, Vec3::ONE),
+        Err(MeshError::Empty { .. })
+    ));
 }
 
 const CUBE_OBJ: &str = "# unit cube, quads, outward\n\
@@ -118,7 +131,10 @@ fn obj_quads_are_triangulated_and_scaled() {
     // A mirroring scale must keep the winding outward.
     let m = load_mesh(&p, Vec3::new(-1.0, 1.0, 1.0)).unwrap();
     assert!(close(m.signed_volume(), 1.0), "{}", m.signed_volume());
-    assert!(matches!(load_mesh(&p, Vec3::new(0.0, 1.0, 1.0)), Err(MeshError::BadScale { .. })));
+    assert!(matches!(
+        load_mesh(&p, Vec3::new(0.0, 1.0, 1.0)),
+        Err(MeshError::BadScale { .. })
+    ));
 }
 
 #[test]
@@ -135,21 +151,35 @@ fn obj_with_two_objects_is_concatenated() {
 #[test]
 fn bad_obj_inputs_name_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let p = write(dir.path(), "oob.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    let p = write(
+        dir.path(),
+        "oob.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    );
     let err = load_mesh(&p, Vec3::ONE).unwrap_err();
     assert!(err.to_string().contains("oob.obj"), "{err}");
-    let p = write(dir.path(), "nan.obj", b"v 0 0 0\nv 1 0 0\nv NaN 1 0\nf 1 2 3\n");
+    let p = write(
+        dir.path(),
+        "nan.obj",
+        b"v 0 0 0\nv 1 0 0\nv NaN 1 0\nf 1 2 3\n",
+    );
     let err = load_mesh(&p, Vec3::ONE).unwrap_err();
     assert!(err.to_string().contains("nan.obj"), "{err}");
     let p = write(dir.path(), "empty.obj", b"# nothing\n");
-    assert!(matches!(load_mesh(&p, Vec3::ONE), Err(MeshError::Empty { .. })));
+    assert!(matches!(
+        load_mesh(&p, Vec3::ONE),
+        Err(MeshError::Empty { .. })
+    ));
 }
 
 #[test]
 fn unknown_extension_and_missing_file() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "x.ply", b"ply");
-    assert!(matches!(load_mesh(&p, Vec3::ONE), Err(MeshError::UnsupportedFormat { .. })));
+    assert!(matches!(
+        load_mesh(&p, Vec3::ONE),
+        Err(MeshError::UnsupportedFormat { .. })
+    ));
     let missing = dir.path().join("missing.stl");
     let err = load_mesh(&missing, Vec3::ONE).unwrap_err();
     assert!(matches!(err, MeshError::Io { .. }) && err.to_string().contains("missing.stl"));
@@ -199,7 +229,11 @@ fn dae_units_scene_transforms_and_z_up() {
     let m = load_mesh(&p, Vec3::ONE).unwrap();
     assert_eq!(m.indices.len(), 24);
     // 1 m^3 plus a cube stretched 2x in x: 3 m^3.
-    assert!((m.signed_volume() - 3.0).abs() < 1e-9, "{}", m.signed_volume());
+    assert!(
+        (m.signed_volume() - 3.0).abs() < 1e-9,
+        "{}",
+        m.signed_volume()
+    );
     let (lo, hi) = m.aabb().unwrap();
     assert!((lo - Vec3::ZERO).length() < 1e-12);
     // Second cube: x in [5, 7] m (matrix translation 500 cm, then scale 2).
@@ -231,9 +265,15 @@ fn dae_triangles_and_bad_indices() {
     assert_eq!(m.indices, vec![[0, 1, 2]]);
     let bad = write(dir.path(), "bad.dae", tri.replace("IDX", "7").as_bytes());
     let err = load_mesh(&bad, Vec3::ONE).unwrap_err();
-    assert!(err.to_string().contains("bad.dae") && err.to_string().contains("7"), "{err}");
+    assert!(
+        err.to_string().contains("bad.dae") && err.to_string().contains("7"),
+        "{err}"
+    );
     let broken = write(dir.path(), "broken.dae", b"<COLLADA><library_geometries>");
-    assert!(matches!(load_mesh(&broken, Vec3::ONE), Err(MeshError::Malformed { .. })));
+    assert!(matches!(
+        load_mesh(&broken, Vec3::ONE),
+        Err(MeshError::Malformed { .. })
+    ));
 }
 
 #[test]
@@ -245,7 +285,11 @@ fn convex_hull_drops_interior_points() {
     let hull = convex_hull(&m).unwrap();
     assert_eq!(hull.vertices.len(), 8);
     // parry works in f32: volume exact for integer corners.
-    assert!((hull.signed_volume() - 1.0).abs() < 1e-6, "{}", hull.signed_volume());
+    assert!(
+        (hull.signed_volume() - 1.0).abs() < 1e-6,
+        "{}",
+        hull.signed_volume()
+    );
 }
 
 #[test]
@@ -256,5 +300,32 @@ fn bundled_head_mesh_is_a_closed_inscribed_ellipsoid() {
     let v = m.signed_volume();
     // All vertices lie on the ellipsoid, so the polyhedron is inside it: v < exact; a 32x16
     // tessellation loses O(1/n^2), a few percent.
-    assert!(v < exact && v > 0.95 * exact, "volume {v} vs ellipsoid {exact}");
+    assert!(
+        v < exact && v > 0.95 * exact,
+        "volume {v} vs ellipsoid {exact}"
+    );
+}
+
+#[test]
+fn simplification_meets_the_budget_and_stays_inside() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("urdf/meshes/head.stl");
+    let m = load_mesh(&p, Vec3::ONE).unwrap();
+    let s = drape::mesh::simplify(&m, 200);
+    assert!(
+        s.indices.len() <= 200 && s.indices.len() >= 50,
+        "{}",
+        s.indices.len()
+    );
+    // Cluster representatives are means of surface points of a convex body: inside its hull,
+    // so the volume can only shrink; a coarse grid loses at most a few tens of percent.
+    let (v0, v1) = (m.signed_volume(), s.signed_volume());
+    assert!(v1 <= v0 * (1.0 + 1e-9) && v1 > 0.6 * v0, "{v1} vs {v0}");
+    let ((lo0, hi0), (lo1, hi1)) = (m.aabb().unwrap(), s.aabb().unwrap());
+    assert!(lo1.cmpge(lo0 - 1e-12).all() && hi1.cmple(hi0 + 1e-12).all());
+    assert!(drape::mesh::validate(&p, &s).is_ok());
+    assert_eq!(
+        drape::mesh::simplify(&m, 10_000),
+        m,
+        "within budget: unchanged"
+    );
 }

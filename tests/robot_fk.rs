@@ -185,3 +185,19 @@ fn fk_matches_reference_drape_bot() {
         0x5eed_0004,
     );
 }
+
+/// pybullet's humanoid ends in a NUL byte and uses non-standard `spherical` joints (loaded as
+/// free joints that default to identity and are reported).
+#[test]
+fn humanoid_with_trailing_nul_and_spherical_joints_loads() {
+    let path = pybullet_data().join("humanoid/humanoid.urdf");
+    let options = UrdfOptions {
+        use_ros_env: false,
+        ..Default::default()
+    };
+    let robot = Robot::from_urdf_file(&path, &options).unwrap_or_else(|e| panic!("{e}"));
+    let mut out = Vec::new();
+    let report = robot.link_poses_into(&robot.zero_positions(), &mut out);
+    assert_eq!(report.free_defaulted.len(), 8, "{report:?}");
+    assert!(out.iter().all(|p| p.is_finite()));
+}

@@ -5,8 +5,11 @@
 
 mod dae;
 mod obj;
+mod simplify;
 mod stl;
 mod xml;
+
+pub use simplify::simplify;
 
 use crate::Vec3;
 use std::path::{Path, PathBuf};
