@@ -211,7 +211,15 @@ fn free_joints_use_supplied_pose_or_identity_and_report() {
     let report = robot.link_poses_into(&q, &mut out);
     assert_eq!(report.free_defaulted, vec![0]);
     assert!((out[1].translation - Vec3::Z).length() < TOL);
-    q.free_poses[0] = Some(Pose::from_xyz_rpy([1.0, 0.0, 0.0], [0.0, 0.0, 0.3]));
+    let mut map = std::collections::HashMap::new();
+    map.insert(
+        "free".to_string(),
+        Pose::from_xyz_rpy([1.0, 0.0, 0.0], [0.0, 0.0, 0.3]),
+    );
+    drape::robot::apply_free_poses(robot.kinematics(), &map, &mut q).unwrap();
+    let mut bad = map.clone();
+    bad.insert("nope".to_string(), Pose::IDENTITY);
+    assert!(drape::robot::apply_free_poses(robot.kinematics(), &bad, &mut q.clone()).is_err());
     let report = robot.link_poses_into(&q, &mut out);
     assert!(report.is_clean());
     assert!((out[1].translation - Vec3::new(1.0, 0.0, 1.0)).length() < TOL);

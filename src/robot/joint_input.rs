@@ -1,8 +1,10 @@
 //! Joint commands from outside (ROS `JointState`, scene-file trajectories), validated before
 //! they touch the robot state: a bad message is rejected whole and the state stays as it was.
 
-use super::kinematics::{JointPositions, Kinematics};
+use super::kinematics::{JointKind, JointPositions, Kinematics};
+use crate::Pose;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// One named joint update, e.g. a `sensor_msgs/JointState`.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -26,6 +28,10 @@ pub enum JointInputError {
     UnknownJoint(String),
     #[error("joint `{0}` appears twice")]
     Duplicate(String),
+    #[error("joint `{0}` is not a floating or planar joint")]
+    NotFree(String),
+    #[error("joint `{0}`: pose is not finite")]
+    NonFinitePose(String),
     #[error("joint `{name}`: {what} {value} is not finite")]
     NotFinite {
         name: String,
@@ -100,6 +106,38 @@ impl JointInput {
         }
         Ok(())
     }
+}
+
+/// Sets the motion of floating/planar joints from a name -> pose map (e.g. a tracked base),
+/// after checking every entry; on error nothing is written.
+pub fn apply_free_poses(
+    kin: &Kinematics,
+    poses: &HashMap<String, Pose>,
+    q: &mut JointPositions,
+) -> Result<(), JointInputError> {
+    for (name, pose) in poses {
+        let ji = kin
+            .joint_index(name)
+            .ok_or_else(|| JointInputError::UnknownJoint(name.clone()))?;
+        if !matches!(
+            kin.joints()[ji].kind,
+            JointKind::Floating | JointKind::Planar
+        ) {
+            return Err(JointInputError::NotFree(name.clone()));
+        }
+        if !pose.is_finite() {
+            return Err(JointInputError::NonFinitePose(name.clone()));
+        }
+    }
+    if q.free_poses.len() < kin.joints().len() {
+        q.free_poses.resize(kin.joints().len(), None);
+    }
+    for (name, pose) in poses {
+        if let Some(ji) = kin.joint_index(name) {
+            q.free_poses[ji] = Some(*pose);
+        }
+    }
+    Ok(())
 }
 
 /// A scripted joint motion for the scene file:

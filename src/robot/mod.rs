@@ -6,7 +6,10 @@ pub mod kinematics;
 pub mod resolve;
 pub mod urdf;
 
-pub use joint_input::{JointInput, JointInputError, JointTrajectory, TrajectoryError};
+pub use joint_input::{
+    apply_free_poses, JointInput, JointInputError, JointTrajectory, TrajectoryError,
+    TrajectoryPoint,
+};
 pub use kinematics::{FkReport, Joint, JointKind, JointPositions, Kinematics, Mimic, TreeError};
 pub use resolve::SearchPaths;
 pub use urdf::{RobotError, UrdfOptions};
