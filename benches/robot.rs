@@ -9,7 +9,10 @@ use std::path::{Path, PathBuf};
 
 fn pybullet_data() -> Option<PathBuf> {
     let out = std::process::Command::new("python3")
-        .args(["-c", "import pybullet_data; print(pybullet_data.getDataPath())"])
+        .args([
+            "-c",
+            "import pybullet_data; print(pybullet_data.getDataPath())",
+        ])
         .output()
         .ok()?;
     out.status
