@@ -1,1 +1,78 @@
-//! robot (placeholder)
+//! Robots from URDF: kinematic tree, forward kinematics, joint inputs, and per-link collision
+//! geometry for the collision stage.
+
+pub mod joint_input;
+pub mod kinematics;
+pub mod resolve;
+pub mod urdf;
+
+pub use joint_input::{
+    apply_free_poses, JointInput, JointInputError, JointTrajectory, TrajectoryError,
+    TrajectoryPoint,
+};
+pub use kinematics::{FkReport, Joint, JointKind, JointPositions, Kinematics, Mimic, TreeError};
+pub use resolve::SearchPaths;
+pub use urdf::{RobotError, UrdfOptions};
+
+use crate::mesh::TriMeshData;
+use crate::{Pose, Vec3};
+use std::sync::Arc;
+
+/// Collision geometry of a link, in its own frame (see the pose it is paired with).
+///
+/// Cylinders and capsules follow URDF: their axis is the local **z** axis, centred on the
+/// origin, `length` excluding the capsule caps. (parry's are along y; the collision layer
+/// converts.)
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    Sphere { radius: f64 },
+    Box { half_extents: Vec3 },
+    Cylinder { radius: f64, length: f64 },
+    Capsule { radius: f64, length: f64 },
+    Mesh(Arc<TriMeshData>),
+}
+
+/// A loaded robot: kinematics plus collision shapes, link-indexed.
+#[derive(Debug, Clone)]
+pub struct Robot {
+    pub name: String,
+    kinematics: Kinematics,
+    collision: Vec<Vec<(Pose, Geometry)>>,
+}
+
+impl Robot {
+    pub fn kinematics(&self) -> &Kinematics {
+        &self.kinematics
+    }
+
+    /// Per link (indexed like [`Kinematics::links`]): shapes with their pose in the link frame.
+    pub fn collision_shapes(&self) -> &[Vec<(Pose, Geometry)>] {
+        &self.collision
+    }
+
+    pub fn link_names(&self) -> &[String] {
+        self.kinematics.links()
+    }
+
+    pub fn link_index(&self, name: &str) -> Option<usize> {
+        self.kinematics.link_index(name)
+    }
+
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.kinematics.joint_index(name)
+    }
+
+    pub fn zero_positions(&self) -> JointPositions {
+        self.kinematics.zero_positions()
+    }
+
+    /// Link poses in the root link frame. See [`Kinematics::link_poses_into`] for the
+    /// allocation-free variant that also reports clamping.
+    pub fn link_poses(&self, q: &JointPositions) -> Vec<Pose> {
+        self.kinematics.link_poses(q)
+    }
+
+    pub fn link_poses_into(&self, q: &JointPositions, out: &mut Vec<Pose>) -> FkReport {
+        self.kinematics.link_poses_into(q, out)
+    }
+}

@@ -1,0 +1,48 @@
+//! Wavefront OBJ via `tobj`, triangulating polygons; materials are not read.
+
+use super::{MeshError, TriMeshData};
+use crate::Vec3;
+use std::path::Path;
+
+pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mut reader = std::io::BufReader::new(bytes);
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| MeshError::malformed(path, format!("OBJ: {e}")))?;
+    let mut mesh = TriMeshData::default();
+    for model in &models {
+        let m = &model.mesh;
+        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+            return Err(MeshError::malformed(
+                path,
+                format!(
+                    "OBJ object `{}`: ragged position or index array",
+                    model.name
+                ),
+            ));
+        }
+        let part = TriMeshData {
+            vertices: m
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+                .collect(),
+            indices: m
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+        };
+        // Validate per object before offsetting so an error names the real index.
+        super::validate_indices(path, &part)?;
+        mesh.append(&part);
+    }
+    Ok(mesh)
+}
