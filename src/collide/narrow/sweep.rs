@@ -11,8 +11,8 @@
 /// Time resolution: a hit is reported at most this much earlier than the true first contact.
 pub const TIME_TOL: f64 = 1e-10;
 /// Distance evaluations allowed before giving up conservatively.
-pub const MAX_EVALS: usize = 160;
-const STACK: usize = 48;
+pub const MAX_EVALS: usize = 1024;
+const STACK: usize = 64;
 
 /// Earliest `t` in `[0, 1]` with `dist(t) <= eta`, assuming `dist` is `lip`-Lipschitz on `[0, 1]`.
 pub fn earliest_within(dist: impl Fn(f64) -> f64, lip: f64, eta: f64) -> Option<f64> {
