@@ -8,7 +8,7 @@
 //!   cubic vanish identically and falls back to the thickness test.
 //! - `*_ccd_thick`: report the earliest `t` at which the distance is `<= eta` (conservative
 //!   advancement, [`super::sweep`]): no false negatives, rare false positives within
-//!   `TIME_TOL`/`SLACK_REL` of the threshold.
+//!   `THICK_ACCEPT_REL`/`SLACK_REL` of the threshold.
 //!
 //! Every test first rejects on swept bounding boxes inflated by `eta`. All tolerances add a
 //! numerical slack of `SLACK_REL` times the largest absolute coordinate, so touching contacts
@@ -21,6 +21,8 @@ use crate::Vec3;
 
 /// Numerical slack on distances, relative to the largest absolute coordinate involved.
 pub const SLACK_REL: f64 = 1e-12;
+/// Thick tests stop at the first time the distance is within `eta (1 + THICK_ACCEPT_REL) + slack`.
+pub const THICK_ACCEPT_REL: f64 = 1e-6;
 
 /// A vertex-triangle contact.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -220,8 +222,9 @@ pub fn vertex_triangle_ccd(
 
 /// Earliest `t` in `[0, 1]` at which point `p` is within `eta` of the moving triangle.
 ///
-/// Never misses a contact (up to `SLACK_REL` rounding); may report one up to `TIME_TOL`
-/// early, or spuriously when the distance only comes within `SLACK_REL` of `eta`.
+/// Never misses a contact (up to `SLACK_REL` rounding). The reported time is the first at which
+/// the distance is within `eta (1 + THICK_ACCEPT_REL) + slack` (or up to `TIME_TOL` earlier), so
+/// a distance that only comes that close to `eta` is a (harmless) false positive.
 pub fn vertex_triangle_ccd_thick(
     p0: Vec3,
     p1: Vec3,
@@ -248,7 +251,7 @@ pub fn vertex_triangle_ccd_thick(
         let [a, b, c] = [0, 1, 2].map(|i| lerp(tri0[i], tri1[i], t));
         point_triangle_closest(pt, a, b, c).0.distance(pt)
     };
-    let t = earliest_within(dist, lip, limit)?;
+    let t = earliest_within(dist, lip, eta, limit + THICK_ACCEPT_REL * eta)?;
     Some(vt_hit([p0, p1], tri0, tri1, t, limit.max(0.5 * eta)))
 }
 
@@ -327,6 +330,6 @@ pub fn edge_edge_ccd_thick(
         );
         cp.distance(cq)
     };
-    let t = earliest_within(dist, lip, limit)?;
+    let t = earliest_within(dist, lip, eta, limit + THICK_ACCEPT_REL * eta)?;
     Some(ee_hit([p0, p1], [q0, q1], t, limit.max(0.5 * eta)))
 }

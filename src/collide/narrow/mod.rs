@@ -15,7 +15,7 @@ mod tritri;
 
 pub use ccd::{
     edge_edge_ccd, edge_edge_ccd_thick, vertex_triangle_ccd, vertex_triangle_ccd_thick, EeHit,
-    VtHit, SLACK_REL,
+    VtHit, SLACK_REL, THICK_ACCEPT_REL,
 };
 pub use closest::{point_segment_closest, point_triangle_closest, segment_segment_closest};
 pub use tritri::{triangles_intersect, TOUCH_REL};

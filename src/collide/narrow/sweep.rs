@@ -2,10 +2,10 @@
 //!
 //! For linearly moving primitives, `d(t)` (the static distance at time `t`) is Lipschitz with
 //! constant `L = max |v_i - v_j|` over vertex pairs of the two primitives (the closest points are
-//! convex combinations of vertices). Knowing `d(a)` and `d(b)`, no time in
-//! `(a + (d(a) - eta)/L, b - (d(b) - eta)/L)`'s complement can have `d <= eta`, so both ends
-//! are advanced (conservative advancement); when that stalls the interval is bisected, earliest
-//! half first. Exhausting the evaluation budget reports a hit at the earliest unresolved time:
+//! convex combinations of vertices). Knowing `d(a)` and `d(b)`, no time in `[a, b]` outside
+//! `[a + (d(a) - eta)/L, b - (d(b) - eta)/L]` can have `d <= eta`, so both ends are advanced
+//! (conservative advancement); when that stalls the interval is bisected, earliest half first.
+//! Exhausting the evaluation budget reports a hit at the earliest unresolved time:
 //! a possible false positive, never a false negative.
 
 /// Time resolution: a hit is reported at most this much earlier than the true first contact.
@@ -15,9 +15,14 @@ pub const MAX_EVALS: usize = 1024;
 const STACK: usize = 64;
 
 /// Earliest `t` in `[0, 1]` with `dist(t) <= eta`, assuming `dist` is `lip`-Lipschitz on `[0, 1]`.
-pub fn earliest_within(dist: impl Fn(f64) -> f64, lip: f64, eta: f64) -> Option<f64> {
+///
+/// Any time with `dist(t) <= accept` (`accept >= eta`) met on the way is reported as a hit: the
+/// advancement converges to the first `dist = eta` crossing from above only geometrically, and
+/// the gap `accept - eta` lets it stop after a few steps instead of bisecting to `TIME_TOL`.
+pub fn earliest_within(dist: impl Fn(f64) -> f64, lip: f64, eta: f64, accept: f64) -> Option<f64> {
+    let accept = accept.max(eta);
     let d0 = dist(0.0);
-    if d0 <= eta {
+    if d0 <= accept {
         return Some(0.0);
     }
     if lip <= 0.0 || !lip.is_finite() {
@@ -33,7 +38,7 @@ pub fn earliest_within(dist: impl Fn(f64) -> f64, lip: f64, eta: f64) -> Option<
         depth -= 1;
         let (mut a, mut da, mut b, mut db) = stack[depth];
         loop {
-            if da <= eta {
+            if da <= accept {
                 return Some(a);
             }
             let a2 = a + (da - eta) / lip;
@@ -47,7 +52,7 @@ pub fn earliest_within(dist: impl Fn(f64) -> f64, lip: f64, eta: f64) -> Option<
             let da2 = dist(a2);
             let db2 = if b2 < b { dist(b2) } else { db };
             evals += 2;
-            if da2 <= eta {
+            if da2 <= accept {
                 return Some(a2);
             }
             if b2 - a2 > 0.5 * (b - a) {
@@ -77,22 +82,25 @@ mod tests {
     fn finds_first_of_two_dips() {
         // |t - 0.3| and |t - 0.8| dips: Lipschitz 1.
         let d = |t: f64| (t - 0.3).abs().min((t - 0.8).abs() + 0.05);
-        let t = earliest_within(d, 1.0, 0.01).unwrap();
+        let t = earliest_within(d, 1.0, 0.01, 0.01).unwrap();
         assert!((t - 0.29).abs() <= TIME_TOL * 2.0, "{t}");
         // Only the second dip reaches the threshold.
         let d = |t: f64| ((t - 0.3).abs() + 0.1).min((t - 0.8).abs());
-        let t = earliest_within(d, 1.0, 0.01).unwrap();
+        let t = earliest_within(d, 1.0, 0.01, 0.01).unwrap();
         assert!((t - 0.79).abs() <= TIME_TOL * 2.0, "{t}");
     }
 
     #[test]
     fn misses_and_endpoints() {
-        assert_eq!(earliest_within(|t| 1.0 + t, 1.0, 0.5), None);
-        assert_eq!(earliest_within(|_| 0.2, 0.0, 0.5), Some(0.0));
-        let t = earliest_within(|t| 1.0 - t, 1.0, 0.0).unwrap();
+        assert_eq!(earliest_within(|t| 1.0 + t, 1.0, 0.5, 0.5), None);
+        assert_eq!(earliest_within(|_| 0.2, 0.0, 0.5, 0.5), Some(0.0));
+        let t = earliest_within(|t| 1.0 - t, 1.0, 0.0, 0.0).unwrap();
         assert!(t <= 1.0 && t >= 1.0 - 2.0 * TIME_TOL, "{t}");
         // Grazing from above: minimum exactly eta at t = 0.5.
-        let t = earliest_within(|t| 0.1 + (t - 0.5).abs(), 1.0, 0.1).unwrap();
+        let t = earliest_within(|t| 0.1 + (t - 0.5).abs(), 1.0, 0.1, 0.1).unwrap();
         assert!((t - 0.5).abs() <= 2.0 * TIME_TOL, "{t}");
+        // A slow approach (rate 0.1 against a bound of 1) stops once within `accept`.
+        let t = earliest_within(|t| 1.0 - 0.1 * t, 1.0, 0.95, 0.95 + 1e-9).unwrap();
+        assert!(t <= 0.5 && 1.0 - 0.1 * t <= 0.95 + 1e-9, "{t}");
     }
 }
