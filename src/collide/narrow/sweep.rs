@@ -95,7 +95,7 @@ mod tests {
         assert_eq!(earliest_within(|t| 1.0 + t, 1.0, 0.5, 0.5), None);
         assert_eq!(earliest_within(|_| 0.2, 0.0, 0.5, 0.5), Some(0.0));
         let t = earliest_within(|t| 1.0 - t, 1.0, 0.0, 0.0).unwrap();
-        assert!(t <= 1.0 && t >= 1.0 - 2.0 * TIME_TOL, "{t}");
+        assert!((1.0 - 2.0 * TIME_TOL..=1.0).contains(&t), "{t}");
         // Grazing from above: minimum exactly eta at t = 0.5.
         let t = earliest_within(|t| 0.1 + (t - 0.5).abs(), 1.0, 0.1, 0.1).unwrap();
         assert!((t - 0.5).abs() <= 2.0 * TIME_TOL, "{t}");
