@@ -592,3 +592,80 @@ fn random_edge_edge_no_false_negatives() {
         "cubic false positives: {tally:?}"
     );
 }
+
+/// Coplanar-throughout motion (all in z = 0) and zero-area triangles make the cubic vanish
+/// identically; both variants must then behave like the thickness test.
+#[test]
+fn random_coplanar_and_degenerate_no_false_negatives() {
+    let mut rng = Rng(7);
+    let h = 1.0 / SAMPLES as f64;
+    let flat = |x: Vec3| v(x.x, x.y, 0.0);
+    let (mut hits, mut fp) = (0, 0);
+    for case in 0..3000 {
+        let eta = [0.0, 1e-3, 1e-2][case % 3];
+        let margin = 1e-9;
+        let kind = (case / 3) % 3;
+        let (dist_fn, cubic_t, thick_t): (Box<dyn Fn(f64) -> f64>, _, _) = if kind == 2 {
+            // Two edges sliding in the plane z = 0.
+            let q0 = [rng.vec(1.0), rng.vec(1.0)].map(flat);
+            let q1 = q0.map(|x| x + flat(rng.vec(0.3)));
+            let p0 = [rng.vec(1.0), rng.vec(1.0)].map(flat);
+            let p1 = p0.map(|x| x + flat(rng.vec(1.0)));
+            let d = move |t: f64| {
+                let (_, _, x, y) = segment_segment_closest(
+                    lerp(p0[0], p1[0], t),
+                    lerp(p0[1], p1[1], t),
+                    lerp(q0[0], q1[0], t),
+                    lerp(q0[1], q1[1], t),
+                );
+                x.distance(y)
+            };
+            let cubic = edge_edge_ccd(p0, p1, q0, q1, eta).map(|h| h.t);
+            let thick = edge_edge_ccd_thick(p0, p1, q0, q1, eta).map(|h| h.t);
+            (Box::new(d), cubic, thick)
+        } else if kind == 0 {
+            // Point and triangle sliding in the plane z = 0.
+            let t0 = [rng.vec(1.0), rng.vec(1.0), rng.vec(1.0)].map(flat);
+            let t1 = t0.map(|x| x + flat(rng.vec(0.3)));
+            let (p0, p1) = (flat(rng.vec(1.5)), flat(rng.vec(1.5)));
+            let d = move |t: f64| {
+                let [a, b, c] = [0, 1, 2].map(|i| lerp(t0[i], t1[i], t));
+                let p = lerp(p0, p1, t);
+                point_triangle_closest(p, a, b, c).0.distance(p)
+            };
+            let cubic = vertex_triangle_ccd(p0, p1, t0, t1, eta).map(|h| h.t);
+            let thick = vertex_triangle_ccd_thick(p0, p1, t0, t1, eta).map(|h| h.t);
+            (Box::new(d), cubic, thick)
+        } else {
+            // Zero-area triangle (c on segment ab) in general 3D motion.
+            let (a0, b0, a1, b1) = (rng.vec(1.0), rng.vec(1.0), rng.vec(1.0), rng.vec(1.0));
+            let w = rng.f();
+            let t0 = [a0, b0, lerp(a0, b0, w)];
+            let t1 = [a1, b1, lerp(a1, b1, w)];
+            let target = lerp(lerp(a0, a1, 0.5), lerp(b0, b1, 0.5), rng.f()) + rng.vec(0.05);
+            let vp = rng.vec(1.0);
+            let (p0, p1) = (target - vp * 0.5, target + vp * 0.5);
+            let d = move |t: f64| {
+                let [a, b, c] = [0, 1, 2].map(|i| lerp(t0[i], t1[i], t));
+                let p = lerp(p0, p1, t);
+                point_triangle_closest(p, a, b, c).0.distance(p)
+            };
+            let cubic = vertex_triangle_ccd(p0, p1, t0, t1, eta).map(|h| h.t);
+            let thick = vertex_triangle_ccd_thick(p0, p1, t0, t1, eta).map(|h| h.t);
+            (Box::new(d), cubic, thick)
+        };
+        let r = reference(&dist_fn, |_| 0.0, eta, margin);
+        if let Some(tr) = r.first_thick {
+            hits += 1;
+            for (name, got) in [("cubic", cubic_t), ("thick", thick_t)] {
+                let t = got.unwrap_or_else(|| panic!("case {case}: {name} false negative at {tr}"));
+                assert!(t <= tr + h, "case {case}: {name} hit {t} later than {tr}");
+            }
+        } else if thick_t.is_some() && r.min_dist > eta + margin {
+            fp += 1;
+        }
+    }
+    println!("coplanar/degenerate sweep: {hits} reference hits, {fp} thick false positives");
+    assert!(hits > 200, "sample too easy: {hits}");
+    assert!(fp * 100 <= 3000, "false positives: {fp}");
+}
