@@ -1,1 +1,3 @@
 //! collide (placeholder)
+
+pub mod narrow;
