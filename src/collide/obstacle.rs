@@ -520,7 +520,6 @@ fn cuboid_cast(half: Vec3, a: Vec3, d: Vec3) -> Option<SurfaceHit> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use parry3d::query::{PointQuery, RayCast};
 
     fn rnd(seed: &mut u64) -> f64 {
         *seed = seed
