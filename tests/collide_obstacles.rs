@@ -103,9 +103,9 @@ fn sweep(
         let x0 = p.x.clone();
         p.step(&mut st, s as f64 * H, Vec3::ZERO);
         let o = &st.obstacles()[0];
-        for i in 0..p.x.len() {
-            let a = o.pose_prev.inverse_transform_point(x0[i]);
-            let b = o.pose.inverse_transform_point(p.x[i]);
+        for (xa, xb) in x0.iter().zip(&p.x) {
+            let a = o.pose_prev.inverse_transform_point(*xa);
+            let b = o.pose.inverse_transform_point(*xb);
             crossed += path_enters(a, b, inside) as usize;
             ended_inside += inside(b) as usize;
         }
