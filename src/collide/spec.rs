@@ -12,8 +12,9 @@ use super::stage::{CollisionSettings, DetectionMode, ResponseMode};
 use crate::{Pose, Vec3};
 use serde::{Deserialize, Serialize};
 
+/// `shape: { type: sphere, radius: 0.3 }` etc.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     Sphere {
         radius: f64,
@@ -65,8 +66,10 @@ pub struct WaypointSpec {
     pub pose: PoseSpec,
 }
 
+/// `motion: { type: velocity, linear: [..], angular: [..] }`,
+/// `{ type: waypoints, points: [ { t, pose }, .. ] }`, `{ type: static }` or `{ type: external }`.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MotionSpec {
     #[default]
     Static,
@@ -75,7 +78,9 @@ pub enum MotionSpec {
         linear: [f64; 3],
         angular: [f64; 3],
     },
-    Waypoints(Vec<WaypointSpec>),
+    Waypoints {
+        points: Vec<WaypointSpec>,
+    },
     /// Driven by a robot link (the scene attaches it).
     External,
 }
@@ -88,7 +93,7 @@ impl MotionSpec {
                 linear: Vec3::from(*linear),
                 angular: Vec3::from(*angular),
             },
-            MotionSpec::Waypoints(w) => {
+            MotionSpec::Waypoints { points: w } => {
                 Motion::Waypoints(w.iter().map(|w| (w.t, w.pose.to_pose())).collect())
             }
             MotionSpec::External => Motion::External,
@@ -263,18 +268,15 @@ impl ObstacleSpec {
         }
         match &self.motion {
             MotionSpec::Velocity { linear, angular } => {
-                check_finite(format!("{prefix}.motion.velocity.linear"), linear)?;
-                check_finite(format!("{prefix}.motion.velocity.angular"), angular)?;
+                check_finite(format!("{prefix}.motion.linear"), linear)?;
+                check_finite(format!("{prefix}.motion.angular"), angular)?;
             }
-            MotionSpec::Waypoints(w) => {
+            MotionSpec::Waypoints { points: w } => {
                 if w.is_empty() {
-                    return Err(err(
-                        format!("{prefix}.motion.waypoints"),
-                        "must not be empty",
-                    ));
+                    return Err(err(format!("{prefix}.motion.points"), "must not be empty"));
                 }
                 for (i, wp) in w.iter().enumerate() {
-                    let p = format!("{prefix}.motion.waypoints[{i}]");
+                    let p = format!("{prefix}.motion.points[{i}]");
                     check_finite(format!("{p}.t"), &[wp.t])?;
                     if i > 0 && wp.t <= w[i - 1].t {
                         return Err(err(format!("{p}.t"), "times must increase"));
