@@ -182,7 +182,7 @@ fn cubic_roots_01(c: [f64; 4]) -> ([f64; 3], usize) {
 /// Coefficients of the coplanarity cubic `det[x1(t)-x0(t), x2(t)-x0(t), x3(t)-x0(t)]` for linear motion.
 fn coplanarity_cubic(x0: [Vec3; 4], x1: [Vec3; 4]) -> [f64; 4] {
     let f = |t: f64| {
-        let p: Vec<Vec3> = (0..4).map(|i| x0[i].lerp(x1[i], t)).collect();
+        let p: [Vec3; 4] = std::array::from_fn(|i| x0[i].lerp(x1[i], t));
         (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]))
     };
     // Exact interpolation of the cubic through 4 samples.

@@ -250,8 +250,8 @@ impl CollisionStage {
         self.in_contact.resize(self.n_vertices, false);
         let mode = self.settings.mode;
         let response = self.settings.response;
+        let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         for (oi, o) in self.obstacles.iter().enumerate() {
-            let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
             let (olo, ohi) = o.swept_aabb(max_th);
             self.scratch.clear();
             self.scratch.resize(n, None);
