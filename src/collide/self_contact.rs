@@ -154,25 +154,30 @@ impl SelfCollider {
     /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
     /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
     fn broad_phase(&mut self, xa: &[Vec3], xb: &[Vec3], margin: &[f64], vertex_vertex: bool) {
+        // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
+        // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
-        let vbox = |i: usize| Aabb::from_points(&[xa[i], xb[i]], margin[i]);
         self.qboxes.clear();
-        self.qboxes.extend((0..n).map(vbox));
+        self.qboxes
+            .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin[i])));
         if vertex_vertex {
+            self.iboxes.clear();
+            self.iboxes
+                .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], 0.0)));
             let cell = cell_size(&self.qboxes, 0.0);
-            self.hash.build(cell, &self.qboxes);
+            self.hash.build(cell, &self.iboxes);
             let mut pairs = std::mem::take(&mut self.pairs);
             let mut stamp = std::mem::take(&mut self.stamp);
-            let boxes = std::mem::take(&mut self.qboxes);
+            let (q, it) = (std::mem::take(&mut self.qboxes), std::mem::take(&mut self.iboxes));
             collect_pairs(
                 &self.hash,
-                &boxes,
-                &boxes,
+                &q,
+                &it,
                 &mut stamp,
                 |a, b| a < b && !self.adjacent(a, b),
                 &mut pairs,
             );
-            self.qboxes = boxes;
+            (self.qboxes, self.iboxes) = (q, it);
             self.pairs = pairs;
             self.stamp = stamp;
             self.pairs_ee.clear();
@@ -181,20 +186,8 @@ impl SelfCollider {
         let tris = &self.triangles;
         self.iboxes.clear();
         self.iboxes.extend(tris.iter().map(|t| {
-            let m = margin[t[0] as usize]
-                .max(margin[t[1] as usize])
-                .max(margin[t[2] as usize]);
-            let mut b = Aabb::from_points(
-                &[xa[t[0] as usize], xa[t[1] as usize], xa[t[2] as usize]],
-                m,
-            );
-            let b2 = Aabb::from_points(
-                &[xb[t[0] as usize], xb[t[1] as usize], xb[t[2] as usize]],
-                m,
-            );
-            b.lo = b.lo.min(b2.lo);
-            b.hi = b.hi.max(b2.hi);
-            b
+            let [a, b, c] = t.map(|i| i as usize);
+            Aabb::from_points(&[xa[a], xa[b], xa[c], xb[a], xb[b], xb[c]], 0.0)
         }));
         let cell = cell_size(&self.iboxes, 0.0);
         self.hash.build(cell, &self.iboxes);
@@ -206,19 +199,26 @@ impl SelfCollider {
             |v, t| !tris[t as usize].contains(&v),
             &mut self.pairs,
         );
-        // Edges: reuse qboxes for edge boxes.
         let edges = &self.edges;
-        self.qboxes.clear();
-        self.qboxes.extend(edges.iter().map(|e| {
+        self.iboxes.clear();
+        self.iboxes.extend(edges.iter().map(|e| {
             let (a, b) = (e[0] as usize, e[1] as usize);
-            Aabb::from_points(&[xa[a], xa[b], xb[a], xb[b]], margin[a].max(margin[b]))
+            Aabb::from_points(&[xa[a], xa[b], xb[a], xb[b]], 0.0)
         }));
-        let cell = cell_size(&self.qboxes, 0.0);
-        self.hash.build(cell, &self.qboxes);
+        self.qboxes.clear();
+        self.qboxes.extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
+            let m = margin[e[0] as usize].max(margin[e[1] as usize]);
+            Aabb {
+                lo: bx.lo - Vec3::splat(m),
+                hi: bx.hi + Vec3::splat(m),
+            }
+        }));
+        let cell = cell_size(&self.iboxes, 0.0);
+        self.hash.build(cell, &self.iboxes);
         collect_pairs(
             &self.hash,
             &self.qboxes,
-            &self.qboxes,
+            &self.iboxes,
             &mut self.stamp,
             |a, b| a < b && !shares_vertex(&edges[a as usize], &edges[b as usize]),
             &mut self.pairs_ee,
@@ -330,8 +330,9 @@ impl SelfCollider {
         vertex_vertex: bool,
     ) -> usize {
         // Query boxes: end positions inflated by twice the radius (pair distance).
+        let max_th = th.iter().copied().fold(0.0, f64::max);
         self.pair_gap.clear();
-        self.pair_gap.extend(th.iter().map(|t| 2.0 * t));
+        self.pair_gap.extend(th.iter().map(|t| t + max_th));
         let margin = std::mem::take(&mut self.pair_gap);
         self.broad_phase(x1, x1, &margin, vertex_vertex);
         self.pair_gap = margin;
