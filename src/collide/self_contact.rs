@@ -168,7 +168,10 @@ impl SelfCollider {
             self.hash.build(cell, &self.iboxes);
             let mut pairs = std::mem::take(&mut self.pairs);
             let mut stamp = std::mem::take(&mut self.stamp);
-            let (q, it) = (std::mem::take(&mut self.qboxes), std::mem::take(&mut self.iboxes));
+            let (q, it) = (
+                std::mem::take(&mut self.qboxes),
+                std::mem::take(&mut self.iboxes),
+            );
             collect_pairs(
                 &self.hash,
                 &q,
@@ -206,13 +209,14 @@ impl SelfCollider {
             Aabb::from_points(&[xa[a], xa[b], xb[a], xb[b]], 0.0)
         }));
         self.qboxes.clear();
-        self.qboxes.extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
-            let m = margin[e[0] as usize].max(margin[e[1] as usize]);
-            Aabb {
-                lo: bx.lo - Vec3::splat(m),
-                hi: bx.hi + Vec3::splat(m),
-            }
-        }));
+        self.qboxes
+            .extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
+                let m = margin[e[0] as usize].max(margin[e[1] as usize]);
+                Aabb {
+                    lo: bx.lo - Vec3::splat(m),
+                    hi: bx.hi + Vec3::splat(m),
+                }
+            }));
         let cell = cell_size(&self.iboxes, 0.0);
         self.hash.build(cell, &self.iboxes);
         collect_pairs(
