@@ -146,31 +146,60 @@ impl SpatialHash {
     }
 }
 
+/// Per-chunk buffers for `collect_pairs`, kept across steps.
+#[derive(Debug, Default)]
+pub(crate) struct PairScratch {
+    chunks: Vec<(Vec<u32>, Vec<(u32, u32)>)>,
+}
+
+/// Queries per parallel chunk: small enough to balance, large enough to amortise the per-chunk
+/// stamp reset.
+const CHUNK: usize = 1024;
+
 /// Collects deduplicated pairs `(query index, item index)` whose boxes overlap and that `accept`
-/// keeps. `stamp` is scratch of length >= items (reused across calls).
+/// keeps, in query order. Runs the queries in parallel chunks (rayon), each with its own stamp
+/// array for deduplication.
 pub(crate) fn collect_pairs(
     hash: &SpatialHash,
     queries: &[Aabb],
     items: &[Aabb],
-    stamp: &mut Vec<u32>,
-    mut accept: impl FnMut(u32, u32) -> bool,
+    scratch: &mut PairScratch,
+    accept: impl Fn(u32, u32) -> bool + Sync,
     out: &mut Vec<(u32, u32)>,
 ) {
+    use rayon::prelude::*;
     out.clear();
-    stamp.clear();
-    stamp.resize(items.len(), u32::MAX);
-    for (q, qb) in queries.iter().enumerate() {
-        let q = q as u32;
-        hash.query(qb, |i| {
-            let s = &mut stamp[i as usize];
-            if *s == q {
-                return;
-            }
-            *s = q;
-            if items[i as usize].overlaps(qb) && accept(q, i) {
-                out.push((q, i));
+    let n_chunks = queries.len().div_ceil(CHUNK);
+    if scratch.chunks.len() < n_chunks {
+        scratch.chunks.resize_with(n_chunks, Default::default);
+    }
+    scratch.chunks[..n_chunks]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(c, (stamp, found))| {
+            found.clear();
+            stamp.clear();
+            stamp.resize(items.len(), u32::MAX);
+            let start = c * CHUNK;
+            for (k, qb) in queries[start..(start + CHUNK).min(queries.len())]
+                .iter()
+                .enumerate()
+            {
+                let q = (start + k) as u32;
+                hash.query(qb, |i| {
+                    let s = &mut stamp[i as usize];
+                    if *s == q {
+                        return;
+                    }
+                    *s = q;
+                    if items[i as usize].overlaps(qb) && accept(q, i) {
+                        found.push((q, i));
+                    }
+                });
             }
         });
+    for (_, found) in &scratch.chunks[..n_chunks] {
+        out.extend_from_slice(found);
     }
 }
 
@@ -227,9 +256,9 @@ mod tests {
             .collect();
         let mut h = SpatialHash::default();
         h.build(cell_size(&items, 0.0), &items);
-        let mut stamp = Vec::new();
+        let mut scratch = PairScratch::default();
         let mut got = Vec::new();
-        collect_pairs(&h, &queries, &items, &mut stamp, |_, _| true, &mut got);
+        collect_pairs(&h, &queries, &items, &mut scratch, |_, _| true, &mut got);
         got.sort_unstable();
         let mut want = Vec::new();
         for (q, qb) in queries.iter().enumerate() {

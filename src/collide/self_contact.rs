@@ -9,10 +9,11 @@
 //! `M = sum c_k^2 w_k` (w = inverse mass), the minimal-kinetic-energy impulse; kinematic
 //! vertices (w = 0) never move.
 
-use super::broad::{cell_size, collect_pairs, Aabb, SpatialHash};
+use super::broad::{cell_size, collect_pairs, Aabb, PairScratch, SpatialHash};
 use super::narrow;
 use super::stage::{CollisionSettings, DetectionMode};
 use crate::{Mat3, Vec3};
+use rayon::prelude::*;
 
 /// Vertices touching an obstacle respond to cloth-cloth impulses as if this much heavier, so the
 /// cloth on top gives way rather than the layer pressed against the obstacle.
@@ -69,7 +70,9 @@ pub(crate) struct SelfCollider {
     hash: SpatialHash,
     qboxes: Vec<Aabb>,
     iboxes: Vec<Aabb>,
-    stamp: Vec<u32>,
+    stamp: PairScratch,
+    /// Per-candidate CCD hit flags (vertex-triangle, edge-edge), reused.
+    flags: (Vec<bool>, Vec<bool>),
     pairs: Vec<(u32, u32)>,
     pairs_ee: Vec<(u32, u32)>,
     w: Vec<f64>,
@@ -132,7 +135,8 @@ impl SelfCollider {
             hash: SpatialHash::default(),
             qboxes: Vec::new(),
             iboxes: Vec::new(),
-            stamp: Vec::new(),
+            stamp: PairScratch::default(),
+            flags: (Vec::new(), Vec::new()),
             pairs: Vec::new(),
             pairs_ee: Vec::new(),
             w: Vec::new(),
@@ -452,10 +456,25 @@ impl SelfCollider {
         self.pair_gap = margin;
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
-        let mut hits = 0;
-        for &(v, t) in &pairs {
+        // Detect in parallel on the current positions, then answer the hits in order
+        // (Gauss-Seidel), re-testing each since earlier corrections may have resolved it;
+        // hits created by corrections are found by the next pass.
+        let (mut flag_vt, mut flag_ee) = std::mem::take(&mut self.flags);
+        {
+            let this = &*self;
+            let xr: &[Vec3] = x1;
+            pairs
+                .par_iter()
+                .map(|&(v, t)| this.vt_hit(v, t, x0, xr, th).is_some())
+                .collect_into_vec(&mut flag_vt);
+            pairs_ee
+                .par_iter()
+                .map(|&(a, b)| this.ee_hit(a, b, x0, xr, th).is_some())
+                .collect_into_vec(&mut flag_ee);
+        }
+        let hits = flag_vt.iter().chain(&flag_ee).filter(|f| **f).count();
+        for (&(v, t), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f) {
             if let Some((st, nrm)) = self.vt_hit(v, t, x0, x1, th) {
-                hits += 1;
                 if correct {
                     self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
                 } else {
@@ -463,9 +482,8 @@ impl SelfCollider {
                 }
             }
         }
-        for &(e1, e2) in &pairs_ee {
+        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f) {
             if let Some((st, nrm)) = self.ee_hit(e1, e2, x0, x1, th) {
-                hits += 1;
                 if correct {
                     self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
                 } else {
@@ -473,6 +491,7 @@ impl SelfCollider {
                 }
             }
         }
+        self.flags = (flag_vt, flag_ee);
         self.pairs = pairs;
         self.pairs_ee = pairs_ee;
         hits
