@@ -146,10 +146,13 @@ impl SpatialHash {
     }
 }
 
+/// One parallel chunk's dedup stamps and found pairs.
+type ChunkBuffers = (Vec<u32>, Vec<(u32, u32)>);
+
 /// Per-chunk buffers for `collect_pairs`, kept across steps.
 #[derive(Debug, Default)]
 pub(crate) struct PairScratch {
-    chunks: Vec<(Vec<u32>, Vec<(u32, u32)>)>,
+    chunks: Vec<ChunkBuffers>,
 }
 
 /// Queries per parallel chunk: small enough to balance, large enough to amortise the per-chunk
