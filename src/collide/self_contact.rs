@@ -344,42 +344,68 @@ impl SelfCollider {
         let margin = std::mem::take(&mut self.pair_gap);
         self.broad_phase(x1, x1, &margin, vertex_vertex);
         self.pair_gap = margin;
-        let mut count = 0;
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
-        for &(a, b) in &pairs {
-            let st = if vertex_vertex {
-                Stencil {
-                    idx: [a, b, 0, 0],
-                    c: [1.0, -1.0, 0.0, 0.0],
-                    len: 2,
-                }
-            } else {
-                let t = self.triangles[b as usize];
-                let (_, bary) = narrow::point_triangle_closest(
-                    x1[a as usize],
-                    x1[t[0] as usize],
-                    x1[t[1] as usize],
-                    x1[t[2] as usize],
-                );
-                self.vt_stencil(a, b, bary)
-            };
+        // Find close pairs in parallel, then answer them in order (Gauss-Seidel), re-measuring
+        // each on the updated positions.
+        let (mut flag_vt, mut flag_ee) = std::mem::take(&mut self.flags);
+        {
+            let this = &*self;
+            let xr: &[Vec3] = x1;
+            let close = |st: &Stencil| st.eval(xr).length() < this.gap_of(st, th);
+            pairs
+                .par_iter()
+                .map(|&(a, b)| close(&this.close_stencil(a, b, xr, vertex_vertex)))
+                .collect_into_vec(&mut flag_vt);
+            pairs_ee
+                .par_iter()
+                .map(|&(a, b)| close(&this.ee_close_stencil(a, b, xr)))
+                .collect_into_vec(&mut flag_ee);
+        }
+        let mut count = 0;
+        for (&(a, b), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f) {
+            let st = self.close_stencil(a, b, x1, vertex_vertex);
             count += self.repel(&st, x0, x1, v1, th, friction, h) as usize;
         }
-        for &(e1, e2) in &pairs_ee {
-            let (a, b) = (self.edges[e1 as usize], self.edges[e2 as usize]);
-            let (s, u, _, _) = narrow::segment_segment_closest(
-                x1[a[0] as usize],
-                x1[a[1] as usize],
-                x1[b[0] as usize],
-                x1[b[1] as usize],
-            );
-            let st = self.ee_stencil(e1, e2, s, u);
+        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f) {
+            let st = self.ee_close_stencil(e1, e2, x1);
             count += self.repel(&st, x0, x1, v1, th, friction, h) as usize;
         }
+        self.flags = (flag_vt, flag_ee);
         self.pairs = pairs;
         self.pairs_ee = pairs_ee;
         count
+    }
+
+    /// Closest-point stencil of a vertex-triangle (or vertex-vertex) pair at positions `x`.
+    fn close_stencil(&self, a: u32, b: u32, x: &[Vec3], vertex_vertex: bool) -> Stencil {
+        if vertex_vertex {
+            return Stencil {
+                idx: [a, b, 0, 0],
+                c: [1.0, -1.0, 0.0, 0.0],
+                len: 2,
+            };
+        }
+        let t = self.triangles[b as usize];
+        let (_, bary) = narrow::point_triangle_closest(
+            x[a as usize],
+            x[t[0] as usize],
+            x[t[1] as usize],
+            x[t[2] as usize],
+        );
+        self.vt_stencil(a, b, bary)
+    }
+
+    /// Closest-point stencil of an edge-edge pair at positions `x`.
+    fn ee_close_stencil(&self, e1: u32, e2: u32, x: &[Vec3]) -> Stencil {
+        let (a, b) = (self.edges[e1 as usize], self.edges[e2 as usize]);
+        let (s, u, _, _) = narrow::segment_segment_closest(
+            x[a[0] as usize],
+            x[a[1] as usize],
+            x[b[0] as usize],
+            x[b[1] as usize],
+        );
+        self.ee_stencil(e1, e2, s, u)
     }
 
     /// Separates a close pair to its contact distance along the normal of the side it started on,
