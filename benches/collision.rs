@@ -29,7 +29,11 @@ fn drape() -> Drape {
             let arc = (u * u + v * v).sqrt();
             let theta = arc / R;
             let phi = v.atan2(u);
-            let dir = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            let dir = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
             x0.push(dir * (R + TH));
         }
     }
@@ -52,7 +56,11 @@ fn bench(c: &mut Criterion) {
     let n = d.x0.len();
     let w = vec![1.0; n];
     let mut group = c.benchmark_group("collision_step_64x64_sphere");
-    for mode in [DetectionMode::Spheres, DetectionMode::Proximity, DetectionMode::Continuous] {
+    for mode in [
+        DetectionMode::Spheres,
+        DetectionMode::Proximity,
+        DetectionMode::Continuous,
+    ] {
         for self_collision in [false, true] {
             let settings = CollisionSettings {
                 mode,
@@ -60,10 +68,20 @@ fn bench(c: &mut Criterion) {
                 ..CollisionSettings::default()
             };
             let ball = Obstacle::sphere("ball", R, Pose::IDENTITY).expect("valid sphere");
-            let mut stage = CollisionStage::new(settings, vec![ball], d.tris.clone(), n, vec![TH; n], vec![0.5; n])
-                .expect("valid stage");
+            let mut stage = CollisionStage::new(
+                settings,
+                vec![ball],
+                d.tris.clone(),
+                n,
+                vec![TH; n],
+                vec![0.5; n],
+            )
+            .expect("valid stage");
             let (mut x1, mut v1) = (d.x1.clone(), d.v1.clone());
-            let name = format!("{mode:?}/self_{}", if self_collision { "on" } else { "off" });
+            let name = format!(
+                "{mode:?}/self_{}",
+                if self_collision { "on" } else { "off" }
+            );
             group.bench_function(name, |b| {
                 b.iter(|| {
                     x1.copy_from_slice(&d.x1);
