@@ -535,8 +535,13 @@ impl SelfCollider {
         let [a, b, c] = tri.map(|i| i as usize);
         let p = v as usize;
         let eta = CCD_ETA_FRACTION * (th[p] + (th[a] + th[b] + th[c]) / 3.0) + 1e-12;
-        let hit =
-            narrow::vertex_triangle_ccd(x0[p], x1[p], [x0[a], x0[b], x0[c]], [x1[a], x1[b], x1[c]], eta)?;
+        let hit = narrow::vertex_triangle_ccd(
+            x0[p],
+            x1[p],
+            [x0[a], x0[b], x0[c]],
+            [x1[a], x1[b], x1[c]],
+            eta,
+        )?;
         Some((self.vt_stencil(v, t, hit.bary), hit.normal))
     }
 
