@@ -178,6 +178,6 @@ mod tests {
         assert_eq!(y[0], a * x[2]);
         assert_eq!(y[1], Vec3::new(0., 3., 0.));
         assert_eq!(y[2], a.transpose() * x[0]);
-        assert_eq!(m.nnz_blocks(), 5);
+        assert_eq!(m.nnz_blocks(), 7); // 3 diagonal + 2 symmetric pairs
     }
 }

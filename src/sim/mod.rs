@@ -130,6 +130,8 @@ pub struct Simulation {
     x_save: Vec<Vec3>,
     v_save: Vec<Vec3>,
     scratch_f: Vec<Vec3>,
+    /// Forces from outside the cloth (wind, driven vertices) at the start of the substep.
+    fext: Vec<Vec3>,
     inv_mass: Vec<f64>,
     last: StepMetrics,
     collision: Option<CollisionStage>,
@@ -163,6 +165,7 @@ impl Simulation {
             x_save: Vec::new(),
             v_save: Vec::new(),
             scratch_f: Vec::new(),
+            fext: Vec::new(),
             inv_mass: Vec::new(),
             last: StepMetrics::default(),
             collision: None,
@@ -307,7 +310,7 @@ impl Simulation {
             Some(e) => e,
             None => self.energies(),
         };
-        let w_ext = self.external_work_rate(t);
+        let external = self.external_work_rate(t);
         self.x_save.clone_from(&self.cloth.x);
         self.v_save.clone_from(&self.cloth.v);
 
@@ -326,7 +329,7 @@ impl Simulation {
         m.cg_residual_max = m.cg_residual_max.max(stats.cg_residual);
 
         // 3. Guard.
-        match self.check(h, e0, w_ext.as_deref()) {
+        match self.check(h, e0, external.then_some(self.fext.as_slice())) {
             Ok((e1, spent)) => {
                 if self.energy_budget.is_none() {
                     self.budget_scale = e0.1;
@@ -429,36 +432,35 @@ impl Simulation {
 
     /// Work done on the cloth during the substep by forces from outside it (wind and moving
     /// attachments), evaluated at the start state, per unit displacement: returns the forces.
-    fn external_work_rate(&mut self, t: f64) -> Option<Vec<Vec3>> {
+    fn external_work_rate(&mut self, t: f64) -> bool {
+        let has_wind = self.effects.iter().any(|e| e.injects_energy());
         let moving_attachments = self
             .cloth
             .kinematic
             .iter()
             .any(|(i, _)| self.cloth.v[*i as usize] != Vec3::ZERO);
+        if !has_wind && !moving_attachments {
+            return false;
+        }
         let s = State {
             t,
             x: &self.cloth.x,
             v: &self.cloth.v,
         };
         let n = self.cloth.len();
-        crate::integrate::scratch(&mut self.scratch_f, n);
-        let mut fext = vec![Vec3::ZERO; n];
-        let mut any = false;
-        if self.effects.injecting_forces(&s, &mut self.scratch_f) {
-            fext.copy_from_slice(&self.scratch_f);
-            any = true;
-        }
+        crate::integrate::scratch(&mut self.fext, n);
+        self.effects.injecting_forces(&s, &mut self.fext);
         if moving_attachments {
             // Power a driven vertex puts into the cloth: minus the internal force on it times its
             // velocity (gravity on the driven vertex itself does no work on the cloth).
+            crate::integrate::scratch(&mut self.scratch_f, n);
             self.effects.forces(&s, &mut self.scratch_f);
             for (i, _) in &self.cloth.kinematic {
                 let i = *i as usize;
-                fext[i] = -self.scratch_f[i];
+                self.fext[i] = -self.scratch_f[i];
             }
-            any = true;
         }
-        any.then_some(fext)
+        true
     }
 
     /// (total energy, dynamic energy): total = kinetic + every potential; dynamic = kinetic + elastic
