@@ -296,7 +296,11 @@ impl Simulation {
     ) -> Result<(), Box<DivergenceError>> {
         let n = self.cloth.len();
         // 1. Kinematic vertices: start on target, move at the constant velocity that reaches the end target.
-        self.constraints = Constraints::free(n);
+        if self.constraints.filter.len() != n {
+            self.constraints = Constraints::free(n);
+        } else {
+            self.constraints.filter.fill(Filter::Free);
+        }
         for (i, k) in &self.cloth.kinematic {
             let (a, b) = (self.target(k, s0), self.target(k, s1));
             let i = *i as usize;
