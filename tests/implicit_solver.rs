@@ -1,0 +1,49 @@
+//! The implicit solver's multigrid-preconditioned CG on the bundled hanging cloth: it converges to
+//! the requested tolerance in a number of iterations that does not grow with the resolution.
+
+use drape::integrate::IntegratorKind;
+use drape::scene::Scene;
+use drape::sim::Simulation;
+use std::path::Path;
+use std::time::Instant;
+
+/// The bench's scene: hanging cloth at `res x res`, implicit at 60 Hz, CG to 1e-5.
+fn hanging(res: usize) -> Simulation {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/hanging.yaml");
+    let mut s = Scene::load(&path).expect("bundled scene");
+    s.cloths[0].grid.resolution = [res, res];
+    s.solver.integrator = IntegratorKind::Implicit;
+    s.solver.dt = 1.0 / 60.0;
+    s.solver.cg_tolerance = 1e-5;
+    s.build().expect("valid scene")
+}
+
+/// Iterations of each of `steps` steps, and the mean wall time per step.
+fn run(res: usize, steps: usize) -> (Vec<u32>, f64, f64) {
+    let mut sim = hanging(res);
+    let mut its = Vec::new();
+    let mut worst: f64 = 0.0;
+    let t0 = Instant::now();
+    for _ in 0..steps {
+        let m = sim.step().expect("stable");
+        its.push(m.cg_iterations);
+        worst = worst.max(m.cg_residual_max);
+    }
+    (its, t0.elapsed().as_secs_f64() * 1e3 / steps as f64, worst)
+}
+
+#[test]
+#[ignore = "measurement: cargo test --release --test implicit_solver -- --ignored --nocapture"]
+fn measure_iterations_and_time() {
+    for res in [32, 64, 128] {
+        let (its, ms, worst) = run(res, 30);
+        println!("{res}x{res}: {ms:.2} ms/step, worst residual {worst:.2e}, iterations {its:?}");
+    }
+}
+
+#[test]
+#[ignore = "profiling helper"]
+fn profile_64() {
+    let (its, ms, _) = run(64, 30);
+    println!("64x64: {ms:.2} ms/step {its:?}");
+}
