@@ -248,8 +248,8 @@ fn aggregate(a: &Csr, diag: &[Mat3]) -> (Vec<u32>, usize) {
     }
     // Phase 2: join the most strongly connected phase-1 aggregate.
     let phase1 = agg.clone();
-    for i in 0..n {
-        if agg[i] != NONE {
+    for (i, ai) in agg.iter_mut().enumerate() {
+        if *ai != NONE {
             continue;
         }
         let (cols, vals) = a.row(i);
@@ -260,7 +260,7 @@ fn aggregate(a: &Csr, diag: &[Mat3]) -> (Vec<u32>, usize) {
                 best = (s, phase1[j as usize]);
             }
         }
-        agg[i] = best.1;
+        *ai = best.1;
     }
     // Phase 3: whatever is left (isolated or weakly connected rows) forms its own aggregates.
     for i in 0..n {
@@ -404,18 +404,13 @@ impl Dense {
         tmp.clear();
         tmp.extend(b.iter().flat_map(|v| [v.x, v.y, v.z]));
         for i in 0..n {
-            let mut s = tmp[i];
-            for k in 0..i {
-                s -= self.l[i * n + k] * tmp[k];
-            }
-            tmp[i] = s / self.l[i * n + i];
+            let row = &self.l[i * n..i * n + i];
+            let s: f64 = row.iter().zip(&tmp[..i]).map(|(l, t)| l * t).sum();
+            tmp[i] = (tmp[i] - s) / self.l[i * n + i];
         }
         for i in (0..n).rev() {
-            let mut s = tmp[i];
-            for k in i + 1..n {
-                s -= self.l[k * n + i] * tmp[k];
-            }
-            tmp[i] = s / self.l[i * n + i];
+            let s: f64 = (i + 1..n).map(|k| self.l[k * n + i] * tmp[k]).sum();
+            tmp[i] = (tmp[i] - s) / self.l[i * n + i];
         }
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = Vec3::new(tmp[3 * i], tmp[3 * i + 1], tmp[3 * i + 2]);
@@ -529,13 +524,6 @@ impl Multigrid {
         } else {
             None
         };
-        if std::env::var_os("DRAPE_MG_DEBUG").is_some() {
-            eprintln!(
-                "mg levels {:?} nnz {:?}",
-                levels.iter().map(|l| l.a.rows()).collect::<Vec<_>>(),
-                levels.iter().map(|l| l.a.cols.len()).collect::<Vec<_>>()
-            );
-        }
         Ok(Multigrid {
             levels,
             dense,
@@ -549,6 +537,7 @@ impl Multigrid {
     }
 
     /// Block rows per level, finest first.
+    #[cfg(test)]
     pub fn level_sizes(&self) -> Vec<usize> {
         self.levels.iter().map(|l| l.a.rows()).collect()
     }
@@ -606,82 +595,4 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         *xi += *ci;
     }
     l.gauss_seidel(true);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::integrate::PatternBuilder;
-
-    /// Spring grid `res x res`: `M + h^2 K`, K from axial springs to the 8 neighbours and
-    /// distance-2 axial neighbours (the bending pattern), all SPD.
-    pub(crate) fn grid_system(res: usize, k: f64, m: f64) -> BlockCsr {
-        let id = |i: usize, j: usize| (i * res + j) as u32;
-        let mut springs = Vec::new();
-        for i in 0..res {
-            for j in 0..res {
-                for (di, dj, kk) in [
-                    (0, 1, k),
-                    (1, 0, k),
-                    (1, 1, 0.1 * k),
-                    (1, -1, 0.1 * k),
-                    (0, 2, 1e-3 * k),
-                    (2, 0, 1e-3 * k),
-                ] {
-                    let (a, b) = (i as i64 + di, j as i64 + dj);
-                    if a < res as i64 && b >= 0 && b < res as i64 {
-                        let d =
-                            Vec3::new(di as f64, dj as f64, 0.05 * ((i * 7 + j * 3) % 5) as f64)
-                                .normalize();
-                        springs.push((id(i, j), id(a as usize, b as usize), kk, d));
-                    }
-                }
-            }
-        }
-        let mut p = PatternBuilder::new();
-        for &(a, b, _, _) in &springs {
-            p.couple(a, b);
-        }
-        let mut a = p.build(res * res);
-        for &(i, j, kk, d) in &springs {
-            let blk =
-                Mat3::from_cols(d * d.x, d * d.y, d * d.z) * kk + Mat3::IDENTITY * (0.02 * kk);
-            a.add(i, i, blk);
-            a.add(j, j, blk);
-            a.add(i, j, -blk);
-            a.add(j, i, -blk);
-        }
-        a.add_diagonal(&vec![m; res * res]);
-        a
-    }
-
-    #[test]
-    #[ignore = "timing helper"]
-    fn time_kernels() {
-        let a = grid_system(64, 0.56, 5e-5);
-        let filt = vec![Filter::Free; 4096];
-        let mut c = Csr::default();
-        c.filtered(&a, &filt);
-        let x = vec![Vec3::ONE; 4096];
-        let mut y = vec![Vec3::ZERO; 4096];
-        let t = std::time::Instant::now();
-        for _ in 0..100 {
-            c.mul(&x, &mut y);
-        }
-        eprintln!("mul {:?}", t.elapsed() / 100);
-        let t = std::time::Instant::now();
-        let mut mg = Multigrid::build(c.clone()).expect("builds");
-        eprintln!("build {:?} {:?}", t.elapsed(), mg.level_sizes());
-        let t = std::time::Instant::now();
-        for _ in 0..100 {
-            mg.apply(&x, &mut y);
-        }
-        eprintln!("vcycle {:?}", t.elapsed() / 100);
-        let mut l = Level::new(c, 0).expect("level");
-        let t = std::time::Instant::now();
-        for _ in 0..100 {
-            l.gauss_seidel(false);
-        }
-        eprintln!("gs {:?}", t.elapsed() / 100);
-    }
 }
