@@ -465,6 +465,24 @@ impl Level {
     }
 }
 
+impl Level {
+    /// `r = b - A x` right after one forward sweep from `x = 0`: row `i` was solved exactly with
+    /// the rows after it still zero, so only the strictly upper part contributes,
+    /// `r_i = -sum_{j > i} A_ij x_j` (half the multiplications of a full residual).
+    fn residual_after_forward_sweep(&mut self) {
+        for (i, ri) in self.r.iter_mut().enumerate() {
+            let (cols, vals) = self.a.row(i);
+            let mut acc = Vec3::ZERO;
+            for (&j, &m) in cols.iter().zip(vals) {
+                if j as usize > i {
+                    acc -= m * self.x[j as usize];
+                }
+            }
+            *ri = acc;
+        }
+    }
+}
+
 fn invert_diagonal(a: &Csr, level: usize) -> Result<Vec<Mat3>, MultigridError> {
     let diag = a.diagonal_blocks(level)?;
     diag.iter()
@@ -584,10 +602,7 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         return;
     }
     l.gauss_seidel(false);
-    l.a.mul(&l.x, &mut l.r);
-    for (ri, bi) in l.r.iter_mut().zip(&l.b) {
-        *ri = *bi - *ri;
-    }
+    l.residual_after_forward_sweep();
     l.pt.mul(&l.r, &mut rest[0].b);
     cycle(rest, dense, tmp);
     l.p.mul(&rest[0].x, &mut l.r);
