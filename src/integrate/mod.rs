@@ -8,6 +8,7 @@
 
 mod explicit;
 mod implicit;
+mod precond;
 mod rk4;
 mod sparse;
 

@@ -108,6 +108,12 @@ impl BlockCsr {
         self.vals[slot] += m;
     }
 
+    /// Column indices and blocks of row `r` (read-only view for preconditioners).
+    pub fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
+        let (s, e) = (self.row_start[r], self.row_start[r + 1]);
+        (&self.cols[s..e], &self.vals[s..e])
+    }
+
     pub fn diagonal(&self, i: usize) -> Mat3 {
         self.vals[self.diag[i]]
     }
