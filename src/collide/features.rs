@@ -177,6 +177,10 @@ pub(crate) struct FeatureCollider {
     cand_tris: Vec<u32>,
     cand_edges: Vec<u32>,
     hits: Vec<Hit>,
+    /// Vertices moved by the previous pass: only their faces and edges can have new contacts.
+    dirty: Vec<bool>,
+    /// Vertices moved by the current pass.
+    moved: Vec<bool>,
 }
 
 impl FeatureCollider {
@@ -222,25 +226,40 @@ impl FeatureCollider {
             return 0;
         }
         let mut answered = 0;
-        for _ in 0..PASSES {
-            self.detect(o, f, s, x1);
+        for pass in 0..PASSES {
+            self.detect(o, f, s, x1, pass > 0);
             if self.hits.is_empty() {
                 break;
             }
-            let mut moved = false;
+            self.moved.clear();
+            self.moved.resize(x1.len(), false);
+            let mut any = false;
             for hit in &self.hits {
-                let r = respond(o, f.radius, hit, s, x1, v1, touched);
+                let r = respond(o, f.radius, hit, s, x1, v1, &mut self.moved);
                 answered += usize::from(r.is_some());
-                moved |= r.unwrap_or(false);
+                any |= r.unwrap_or(false);
             }
-            if !moved {
+            for (t, &m) in touched.iter_mut().zip(&self.moved) {
+                *t |= m;
+            }
+            std::mem::swap(&mut self.dirty, &mut self.moved);
+            if !any {
                 break;
             }
         }
         answered
     }
 
-    fn detect(&mut self, o: &Obstacle, f: &Features, s: &ClothState, x1: &[Vec3]) {
+    /// Finds contacts over the step; with `only_dirty`, only on faces and edges with a vertex
+    /// moved by the previous pass (the others' contacts were answered and cannot change).
+    fn detect(
+        &mut self,
+        o: &Obstacle,
+        f: &Features,
+        s: &ClothState,
+        x1: &[Vec3],
+        only_dirty: bool,
+    ) {
         let continuous = s.mode == DetectionMode::Continuous;
         let x0 = if continuous { s.x0 } else { x1 };
         let start_pose = if continuous { o.pose_prev } else { o.pose };
@@ -249,6 +268,7 @@ impl FeatureCollider {
         let (olo, ohi) = o.swept_aabb(max_th + f.radius);
 
         let triangles = &self.triangles;
+        let dirty = &self.dirty;
         self.cand_tris.clear();
         self.cand_tris.par_extend(
             (0..triangles.len() as u32)
@@ -256,7 +276,9 @@ impl FeatureCollider {
                 .with_min_len(512)
                 .filter(|&k| {
                     let t = triangles[k as usize];
-                    if t.iter().any(|&v| v as usize >= n) {
+                    if t.iter().any(|&v| v as usize >= n)
+                        || (only_dirty && !t.iter().any(|&v| dirty[v as usize]))
+                    {
                         return false;
                     }
                     let (mut lo, mut hi) =
@@ -276,6 +298,11 @@ impl FeatureCollider {
         }
         self.cand_edges.sort_unstable();
         self.cand_edges.dedup();
+        if only_dirty {
+            let (edges, dirty) = (&self.edges, &self.dirty);
+            self.cand_edges
+                .retain(|&k| edges[k as usize].iter().any(|&v| dirty[v as usize]));
+        }
 
         let world = |p: &Vec3| (start_pose.transform_point(*p), o.pose.transform_point(*p));
         let pts: Vec<(Vec3, Vec3)> = f.points.iter().map(world).collect();
