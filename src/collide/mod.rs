@@ -3,6 +3,7 @@
 //! friction, and cloth-cloth collision with an impact-zone fail-safe.
 
 mod broad;
+mod features;
 pub mod motion;
 pub mod narrow;
 pub mod obstacle;

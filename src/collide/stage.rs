@@ -1,6 +1,7 @@
 //! The collision stage of a simulation step: takes the integrator's candidate end-of-step
 //! positions/velocities and fixes them against obstacles and (optionally) the cloth itself.
 
+use super::features::{ClothState, FeatureCollider, Features};
 use super::obstacle::Obstacle;
 use super::respond::{obstacle_vertex, VertexInput};
 use super::self_contact::SelfCollider;
@@ -93,6 +94,9 @@ pub struct Contact {
 pub struct CollisionReport {
     /// Number of obstacle contacts (see `CollisionStage::contacts`).
     pub contacts: usize,
+    /// Obstacle-feature vs cloth face/edge contacts answered (thin rods, box and mesh edges),
+    /// summed over the detection passes.
+    pub feature_contacts: usize,
     /// Deepest remaining penetration of a contact vertex into an obstacle's thickness layer after
     /// the response (m, >= 0).
     pub deepest_penetration: f64,
@@ -136,6 +140,11 @@ pub struct CollisionStage {
     /// Per-vertex "touches an obstacle" flags, for cloth-cloth mass weighting.
     in_contact: Vec<bool>,
     self_collider: Option<SelfCollider>,
+    /// Per-obstacle edge/corner features and the cloth topology they are tested against.
+    features: Vec<Features>,
+    feature_collider: FeatureCollider,
+    /// Per-vertex "moved by a feature contact" flags (reused).
+    feature_moved: Vec<bool>,
 }
 
 impl CollisionStage {
@@ -177,8 +186,13 @@ impl CollisionStage {
         let self_collider = settings
             .self_collision
             .then(|| SelfCollider::new(&triangles, n_vertices));
+        let features = obstacles.iter().map(Features::of).collect();
+        let feature_collider = FeatureCollider::new(&triangles);
         Ok(Self {
             settings,
+            features,
+            feature_collider,
+            feature_moved: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -228,26 +242,18 @@ impl CollisionStage {
         }
     }
 
-    /// Fixes candidate end-of-step positions `x1` and velocities `v1` (start positions `x0`, step
-    /// `h`). Vertices with `inv_mass == 0` are never moved.
-    pub fn resolve(
+    /// Cloth vertices against every obstacle (all vertices, or those flagged in `only`).
+    #[allow(clippy::too_many_arguments)]
+    fn vertex_pass(
         &mut self,
         x0: &[Vec3],
         x1: &mut [Vec3],
         v1: &mut [Vec3],
         inv_mass: &[f64],
         h: f64,
-    ) -> CollisionReport {
-        let start = Instant::now();
-        let n = self
-            .n_vertices
-            .min(x0.len())
-            .min(x1.len())
-            .min(v1.len())
-            .min(inv_mass.len());
-        self.contacts.clear();
-        self.in_contact.clear();
-        self.in_contact.resize(self.n_vertices, false);
+        n: usize,
+        only: Option<&[bool]>,
+    ) {
         let mode = self.settings.mode;
         let response = self.settings.response;
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
@@ -264,7 +270,7 @@ impl CollisionStage {
                 .enumerate()
                 .with_min_len(256)
                 .for_each(|(i, ((out, x), v))| {
-                    if inv_mass[i] <= 0.0 {
+                    if inv_mass[i] <= 0.0 || only.is_some_and(|m| !m[i]) {
                         return;
                     }
                     let th = thickness[i];
@@ -289,8 +295,61 @@ impl CollisionStage {
                 self.contacts.push(*c);
             }
         }
+    }
+
+    /// Fixes candidate end-of-step positions `x1` and velocities `v1` (start positions `x0`, step
+    /// `h`). Vertices with `inv_mass == 0` are never moved.
+    pub fn resolve(
+        &mut self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        inv_mass: &[f64],
+        h: f64,
+    ) -> CollisionReport {
+        let start = Instant::now();
+        let n = self
+            .n_vertices
+            .min(x0.len())
+            .min(x1.len())
+            .min(v1.len())
+            .min(inv_mass.len());
+        self.contacts.clear();
+        self.in_contact.clear();
+        self.in_contact.resize(self.n_vertices, false);
+        let mode = self.settings.mode;
+        self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
 
         let mut report = CollisionReport::default();
+        // Obstacle edges and thin parts that pass between cloth vertices.
+        let state = ClothState {
+            x0: &x0[..n],
+            inv_mass: &inv_mass[..n],
+            thickness: &self.thickness[..n],
+            friction: &self.friction[..n],
+            h,
+            mode,
+        };
+        let mut moved = std::mem::take(&mut self.feature_moved);
+        moved.clear();
+        moved.resize(n, false);
+        for (o, f) in self.obstacles.iter().zip(&self.features) {
+            report.feature_contacts +=
+                self.feature_collider
+                    .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
+        }
+        if report.feature_contacts > 0 {
+            // A face pushed off a feature can carry a vertex into the obstacle's faces: test the
+            // moved vertices again, keeping the latest contact per (obstacle, vertex).
+            self.vertex_pass(x0, x1, v1, inv_mass, h, n, Some(&moved));
+            self.contacts.sort_by_key(|c| (c.obstacle, c.vertex));
+            self.contacts.reverse();
+            self.contacts.dedup_by_key(|c| (c.obstacle, c.vertex));
+            for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
+                *flag |= m;
+            }
+        }
+        self.feature_moved = moved;
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,

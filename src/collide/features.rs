@@ -1,0 +1,453 @@
+//! Obstacle features (rod axes, box and mesh edges and corners) against cloth faces and edges.
+//!
+//! The vertex stage only asks whether a cloth vertex meets an obstacle. A thin obstacle (a 5 mm
+//! rod, a box edge) can pass through a cloth face between vertices without any vertex touching
+//! it. Here the obstacle is reduced to features in its local frame: corner points and segments,
+//! inflated by a common radius (the rod radius, 0 for box and mesh edges). Each feature moves
+//! with the obstacle from `pose_prev` to `pose` (linearly per feature point); each cloth
+//! triangle and edge moves linearly from `x0` to `x1`. Corner points are tested against cloth
+//! triangles and segments against cloth edges with the conservative-advancement CCD of
+//! [`super::narrow`] at `eta = radius + thickness`: at the first time a segment comes within
+//! `eta` of a triangle, the closest pair is a segment end vs the triangle or the segment vs a
+//! triangle edge, so these two families catch every first contact.
+//!
+//! Response (Bridson et al. 2002 style, the obstacle has infinite mass): the cloth contact
+//! point `c = sum w_k x_k` (barycentric weights) is pushed along the contact normal until it is
+//! `eta` in front of the feature at the end pose; the displacement is split as
+//! `dx_k = w_k m_k^-1 I` with `I = push / sum w_k^2 m_k^-1`, which moves `c` exactly by `push`
+//! and never moves kinematic vertices. The normal velocity of `c` becomes the feature's
+//! (inelastic) and the tangential one loses `mu` times the normal velocity change (Coulomb),
+//! distributed the same way.
+
+use super::narrow::{edge_edge_ccd_thick, vertex_triangle_ccd_thick};
+use super::obstacle::{Geom, Obstacle};
+use super::stage::DetectionMode;
+use crate::Vec3;
+use rayon::prelude::*;
+
+/// Meshes with more unique edges than this get no edge features (the cost would be
+/// features x candidate cloth edges per step); their vertices still collide with the cloth.
+pub(crate) const MAX_MESH_EDGES: usize = 4096;
+
+/// Detect-and-respond passes per step: a push can bring a neighbouring face into contact.
+const PASSES: usize = 4;
+
+/// The end gap is set to `eta (1 + PUSH_SLACK)` so the next pass (tolerance `1e-6 eta`) does
+/// not see the same contact again.
+const PUSH_SLACK: f64 = 1e-3;
+
+/// Feature set of one obstacle, in its local frame.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Features {
+    points: Vec<Vec3>,
+    segments: Vec<[Vec3; 2]>,
+    radius: f64,
+}
+
+impl Features {
+    /// Spheres and planes have none (a sphere's curvature radius exceeds the cloth spacing
+    /// for any sphere the vertex test cannot already hold).
+    pub fn of(o: &Obstacle) -> Features {
+        let axis = |hh: f64, radius: f64| {
+            let (a, b) = (Vec3::new(0.0, -hh, 0.0), Vec3::new(0.0, hh, 0.0));
+            Features {
+                points: vec![a, b],
+                segments: vec![[a, b]],
+                radius,
+            }
+        };
+        match o.geom {
+            Geom::Ball { .. } | Geom::HalfSpace { .. } => Features::default(),
+            Geom::Capsule {
+                radius,
+                half_height,
+            } => axis(half_height, radius),
+            Geom::Cuboid { half } => {
+                let corner = |k: usize| {
+                    Vec3::new(
+                        if k & 1 == 0 { -half.x } else { half.x },
+                        if k & 2 == 0 { -half.y } else { half.y },
+                        if k & 4 == 0 { -half.z } else { half.z },
+                    )
+                };
+                let points: Vec<Vec3> = (0..8).map(corner).collect();
+                let mut segments = Vec::with_capacity(12);
+                for k in 0..8 {
+                    for bit in [1, 2, 4] {
+                        if k & bit == 0 {
+                            segments.push([points[k], points[k | bit]]);
+                        }
+                    }
+                }
+                Features {
+                    points,
+                    segments,
+                    radius: 0.0,
+                }
+            }
+            Geom::Solid => match o.shape.as_cylinder() {
+                Some(c) => cylinder(f64::from(c.half_height), f64::from(c.radius)),
+                None => Features::default(),
+            },
+            Geom::Surface => match o.shape.as_trimesh() {
+                Some(m) => {
+                    let points: Vec<Vec3> = m.vertices().iter().map(|v| v.as_dvec3()).collect();
+                    let mut edges: Vec<[u32; 2]> = m
+                        .indices()
+                        .iter()
+                        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+                        .map(|[a, b]| [a.min(b), a.max(b)])
+                        .collect();
+                    edges.sort_unstable();
+                    edges.dedup();
+                    let segments = if edges.len() <= MAX_MESH_EDGES {
+                        edges
+                            .iter()
+                            .map(|e| [points[e[0] as usize], points[e[1] as usize]])
+                            .collect()
+                    } else {
+                        log::warn!(
+                            "obstacle '{}': {} mesh edges exceed {MAX_MESH_EDGES}; only its \
+                             vertices are tested against cloth faces",
+                            o.name,
+                            edges.len()
+                        );
+                        Vec::new()
+                    };
+                    Features {
+                        points,
+                        segments,
+                        radius: 0.0,
+                    }
+                }
+                None => Features::default(),
+            },
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty() && self.segments.is_empty()
+    }
+}
+
+/// Cylinder (axis y) features, inside the shape so cloth resting on it at its thickness is
+/// never pushed: the axis shortened by the radius at each end, inflated by the radius. Only for
+/// cylinders longer than wide (rods); a wide, flat cylinder (a table top) is left to the vertex
+/// test, whose curvature-radius argument holds for its faces (its sharp rims are a known gap).
+fn cylinder(hh: f64, r: f64) -> Features {
+    if hh <= r {
+        return Features::default();
+    }
+    let (a, b) = (Vec3::new(0.0, r - hh, 0.0), Vec3::new(0.0, hh - r, 0.0));
+    Features {
+        points: vec![a, b],
+        segments: vec![[a, b]],
+        radius: r,
+    }
+}
+
+/// One feature-vs-cloth contact found by the CCD.
+#[derive(Debug, Clone, Copy)]
+struct Hit {
+    t: f64,
+    verts: [u32; 3],
+    w: [f64; 3],
+    /// World unit normal from the feature towards the side the cloth came from.
+    normal: Vec3,
+    /// Feature contact point in the obstacle's local frame.
+    local: Vec3,
+}
+
+/// Per-step inputs shared by detection and response.
+pub(crate) struct ClothState<'a> {
+    pub x0: &'a [Vec3],
+    pub inv_mass: &'a [f64],
+    pub thickness: &'a [f64],
+    pub friction: &'a [f64],
+    pub h: f64,
+    pub mode: DetectionMode,
+}
+
+/// Cloth topology and scratch buffers for feature contacts (kept across steps).
+#[derive(Debug, Default)]
+pub(crate) struct FeatureCollider {
+    triangles: Vec<[u32; 3]>,
+    edges: Vec<[u32; 2]>,
+    tri_edges: Vec<[u32; 3]>,
+    cand_tris: Vec<u32>,
+    cand_edges: Vec<u32>,
+    hits: Vec<Hit>,
+    /// Vertices moved by the previous pass: only their faces and edges can have new contacts.
+    dirty: Vec<bool>,
+    /// Vertices moved by the current pass.
+    moved: Vec<bool>,
+}
+
+impl FeatureCollider {
+    pub fn new(triangles: &[[u32; 3]]) -> Self {
+        let key = |a: u32, b: u32| [a.min(b), a.max(b)];
+        let mut edges: Vec<[u32; 2]> = triangles
+            .iter()
+            .flat_map(|t| [key(t[0], t[1]), key(t[1], t[2]), key(t[2], t[0])])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        let id = |e: [u32; 2]| edges.binary_search(&e).unwrap_or(0) as u32;
+        let tri_edges = triangles
+            .iter()
+            .map(|t| {
+                [
+                    id(key(t[0], t[1])),
+                    id(key(t[1], t[2])),
+                    id(key(t[2], t[0])),
+                ]
+            })
+            .collect();
+        Self {
+            triangles: triangles.to_vec(),
+            edges,
+            tri_edges,
+            ..Self::default()
+        }
+    }
+
+    /// Detects and answers feature contacts of obstacle `o` over the step, updating `x1`, `v1`.
+    /// Marks every moved vertex in `touched`. Returns the number of contacts answered.
+    pub fn resolve(
+        &mut self,
+        o: &Obstacle,
+        f: &Features,
+        s: &ClothState,
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        touched: &mut [bool],
+    ) -> usize {
+        if f.is_empty() || self.triangles.is_empty() || s.mode == DetectionMode::Spheres {
+            return 0;
+        }
+        let mut answered = 0;
+        for pass in 0..PASSES {
+            self.detect(o, f, s, x1, pass > 0);
+            if self.hits.is_empty() {
+                break;
+            }
+            self.moved.clear();
+            self.moved.resize(x1.len(), false);
+            let mut any = false;
+            for hit in &self.hits {
+                let r = respond(o, f.radius, hit, s, x1, v1, &mut self.moved);
+                answered += usize::from(r.is_some());
+                any |= r.unwrap_or(false);
+            }
+            for (t, &m) in touched.iter_mut().zip(&self.moved) {
+                *t |= m;
+            }
+            std::mem::swap(&mut self.dirty, &mut self.moved);
+            if !any {
+                break;
+            }
+        }
+        answered
+    }
+
+    /// Finds contacts over the step; with `only_dirty`, only on faces and edges with a vertex
+    /// moved by the previous pass (the others' contacts were answered and cannot change).
+    fn detect(
+        &mut self,
+        o: &Obstacle,
+        f: &Features,
+        s: &ClothState,
+        x1: &[Vec3],
+        only_dirty: bool,
+    ) {
+        let continuous = s.mode == DetectionMode::Continuous;
+        let x0 = if continuous { s.x0 } else { x1 };
+        let start_pose = if continuous { o.pose_prev } else { o.pose };
+        let n = x0.len().min(x1.len()).min(s.thickness.len());
+        let max_th = s.thickness[..n].iter().copied().fold(0.0, f64::max);
+        let (olo, ohi) = o.swept_aabb(max_th + f.radius);
+
+        let triangles = &self.triangles;
+        let dirty = &self.dirty;
+        self.cand_tris.clear();
+        self.cand_tris.par_extend(
+            (0..triangles.len() as u32)
+                .into_par_iter()
+                .with_min_len(512)
+                .filter(|&k| {
+                    let t = triangles[k as usize];
+                    if t.iter().any(|&v| v as usize >= n)
+                        || (only_dirty && !t.iter().any(|&v| dirty[v as usize]))
+                    {
+                        return false;
+                    }
+                    let (mut lo, mut hi) =
+                        (Vec3::splat(f64::INFINITY), -Vec3::splat(f64::INFINITY));
+                    for &v in &t {
+                        let (a, b) = (x0[v as usize], x1[v as usize]);
+                        lo = lo.min(a).min(b);
+                        hi = hi.max(a).max(b);
+                    }
+                    !(lo.cmpgt(ohi).any() || hi.cmplt(olo).any())
+                }),
+        );
+        self.cand_edges.clear();
+        for &k in &self.cand_tris {
+            self.cand_edges
+                .extend_from_slice(&self.tri_edges[k as usize]);
+        }
+        self.cand_edges.sort_unstable();
+        self.cand_edges.dedup();
+        if only_dirty {
+            let (edges, dirty) = (&self.edges, &self.dirty);
+            self.cand_edges
+                .retain(|&k| edges[k as usize].iter().any(|&v| dirty[v as usize]));
+        }
+
+        let world = |p: &Vec3| (start_pose.transform_point(*p), o.pose.transform_point(*p));
+        let pts: Vec<(Vec3, Vec3)> = f.points.iter().map(world).collect();
+        let segs: Vec<([Vec3; 2], [Vec3; 2])> = f
+            .segments
+            .iter()
+            .map(|[a, b]| {
+                let (a0, a1) = world(a);
+                let (b0, b1) = world(b);
+                ([a0, b0], [a1, b1])
+            })
+            .collect();
+        let eta = |verts: &[u32]| {
+            f.radius
+                + verts
+                    .iter()
+                    .map(|&v| s.thickness[v as usize])
+                    .fold(0.0, f64::max)
+        };
+        let kinematic = |verts: &[u32]| verts.iter().all(|&v| s.inv_mass[v as usize] <= 0.0);
+
+        let vt =
+            self.cand_tris
+                .par_iter()
+                .with_min_len(64)
+                .flat_map_iter(|&k| {
+                    let t = triangles[k as usize];
+                    let skip = kinematic(&t);
+                    let e = eta(&t);
+                    let tri0 = t.map(|v| x0[v as usize]);
+                    let tri1 = t.map(|v| x1[v as usize]);
+                    pts.iter().enumerate().filter(move |_| !skip).filter_map(
+                        move |(i, &(p0, p1))| {
+                            let hit = vertex_triangle_ccd_thick(p0, p1, tri0, tri1, e)?;
+                            Some(Hit {
+                                t: hit.t,
+                                verts: t,
+                                w: hit.bary,
+                                normal: -hit.normal,
+                                local: f.points[i],
+                            })
+                        },
+                    )
+                });
+        let edges = &self.edges;
+        let ee =
+            self.cand_edges
+                .par_iter()
+                .with_min_len(64)
+                .flat_map_iter(|&k| {
+                    let ed = edges[k as usize];
+                    let skip = kinematic(&ed);
+                    let e = eta(&ed);
+                    let p0 = ed.map(|v| x0[v as usize]);
+                    let p1 = ed.map(|v| x1[v as usize]);
+                    segs.iter().enumerate().filter(move |_| !skip).filter_map(
+                        move |(i, &(q0, q1))| {
+                            let hit = edge_edge_ccd_thick(p0, p1, q0, q1, e)?;
+                            let [a, b] = f.segments[i];
+                            Some(Hit {
+                                t: hit.t,
+                                verts: [ed[0], ed[1], ed[1]],
+                                w: [1.0 - hit.s, hit.s, 0.0],
+                                normal: hit.normal,
+                                local: a + (b - a) * hit.u,
+                            })
+                        },
+                    )
+                });
+        self.hits.clear();
+        self.hits.par_extend(vt);
+        self.hits.par_extend(ee);
+        // Earliest contacts first; ties broken by the cloth vertices for determinism.
+        self.hits.sort_unstable_by(|a, b| {
+            a.t.total_cmp(&b.t)
+                .then(a.verts.cmp(&b.verts))
+                .then(a.w[0].total_cmp(&b.w[0]))
+        });
+    }
+}
+
+/// Answers one contact. `None` when it cannot move (all kinematic), else whether positions moved.
+fn respond(
+    o: &Obstacle,
+    radius: f64,
+    hit: &Hit,
+    s: &ClothState,
+    x1: &mut [Vec3],
+    v1: &mut [Vec3],
+    touched: &mut [bool],
+) -> Option<bool> {
+    let idx = hit.verts.map(|v| v as usize);
+    let im = idx.map(|i| s.inv_mass[i].max(0.0));
+    // A repeated vertex (edge hits use slot 2 with weight 0) must count once.
+    let denom: f64 = (0..3).map(|k| hit.w[k] * hit.w[k] * im[k]).sum();
+    if !(denom > 0.0 && denom.is_finite()) {
+        return None;
+    }
+    let th = idx.iter().map(|&i| s.thickness[i]).fold(0.0, f64::max);
+    let eta = radius + th;
+    let n = hit.normal;
+    let f_end = o.pose.transform_point(hit.local);
+    let vs = if s.h > 0.0 {
+        (f_end - o.pose_prev.transform_point(hit.local)) / s.h
+    } else {
+        Vec3::ZERO
+    };
+    let c: Vec3 = (0..3).map(|k| x1[idx[k]] * hit.w[k]).sum();
+    let gap = n.dot(c - f_end);
+    let target = eta * (1.0 + PUSH_SLACK);
+    let mut moved = false;
+    if gap < eta {
+        let impulse = (target - gap) / denom;
+        for k in 0..3 {
+            if hit.w[k] != 0.0 {
+                x1[idx[k]] += n * (hit.w[k] * im[k] * impulse);
+                touched[idx[k]] = true;
+            }
+        }
+        moved = true;
+    }
+
+    let vp: Vec3 = (0..3).map(|k| v1[idx[k]] * hit.w[k]).sum();
+    let rel = vp - vs;
+    let vn = rel.dot(n);
+    if vn >= 0.0 && !moved {
+        return Some(false);
+    }
+    let dvn = (-vn).max(0.0);
+    let vt = rel - n * vn;
+    let vt_len = vt.length();
+    let mu = o
+        .friction
+        .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
+    let vt_new = if vt_len <= mu * dvn {
+        Vec3::ZERO
+    } else {
+        vt * (1.0 - mu * dvn / vt_len)
+    };
+    let dv = n * dvn + (vt_new - vt);
+    for k in 0..3 {
+        if hit.w[k] != 0.0 {
+            v1[idx[k]] += dv * (hit.w[k] * im[k] / denom);
+            touched[idx[k]] = true;
+        }
+    }
+    Some(moved)
+}
