@@ -62,9 +62,10 @@ pub fn link_obstacles(
     for (k, (shape_pose, g)) in shapes.iter().enumerate() {
         let name = format!("{link}/{k}");
         let (local, o) = match g {
-            Geometry::Sphere { radius } => {
-                (*shape_pose, Obstacle::sphere(&name, *radius, Pose::IDENTITY)?)
-            }
+            Geometry::Sphere { radius } => (
+                *shape_pose,
+                Obstacle::sphere(&name, *radius, Pose::IDENTITY)?,
+            ),
             Geometry::Box { half_extents } => (
                 *shape_pose,
                 Obstacle::cuboid(&name, *half_extents, Pose::IDENTITY)?,

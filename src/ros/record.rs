@@ -92,7 +92,7 @@ pub fn record(
 /// `/robot_description` once, offered transient-local so a late subscriber gets it.
 pub fn record_with_robot(
     sim: &mut Simulation,
-    mut driver: Option<&mut RobotDriver>,
+    driver: Option<&mut RobotDriver>,
     out: &Path,
     opts: &RecordOptions,
     stop: &AtomicBool,
@@ -136,15 +136,7 @@ pub fn record_with_robot(
             bag.add_topic::<TFMessage>("/tf", opts.distro, None)?,
         ));
     }
-    let result = run(
-        sim,
-        driver.as_deref_mut(),
-        &mut bag,
-        &topics,
-        opts,
-        stop,
-        &mut progress,
-    );
+    let result = run(sim, driver, &mut bag, &topics, opts, stop, &mut progress);
     // Finish the file whatever happened; a finish error wins only if the run itself succeeded.
     let finished = bag.finish();
     let summary = result?;

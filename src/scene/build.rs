@@ -1,11 +1,6 @@
 //! Turns a validated [`Scene`] into a [`Simulation`]. Only the effects the scene lists are built.
 
 use super::{EffectKind, RobotSpec, Scene, SceneError, Selection};
-use crate::robot::driver::link_obstacles;
-use crate::robot::{
-    JointInputError, JointSource, JointTrajectory, Robot, RobotDriver, TrajectoryError,
-    UrdfOptions,
-};
 use crate::cloth::topology::{bending_stencils, springs, twist_stencils, SpringKind};
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
@@ -13,6 +8,10 @@ use crate::effects::{
     AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion, Wind,
 };
 use crate::integrate::ImplicitSettings;
+use crate::robot::driver::link_obstacles;
+use crate::robot::{
+    JointInputError, JointSource, JointTrajectory, Robot, RobotDriver, TrajectoryError, UrdfOptions,
+};
 use crate::sim::{Frames, Simulation, StepSettings};
 use crate::Vec3;
 
