@@ -260,3 +260,71 @@ pub fn joint_stream(
     }
     (out, dropped)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::UrdfOptions;
+    use crate::Vec3;
+
+    const ARM: &str = r#"<robot name="arm">
+      <link name="base"/>
+      <link name="upper"><collision><origin xyz="0 0 0.2"/>
+        <geometry><cylinder radius="0.05" length="0.4"/></geometry></collision></link>
+      <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+        <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+    </robot>"#;
+
+    fn arm() -> Robot {
+        Robot::from_urdf_str(ARM, None, &UrdfOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn urdf_cylinder_axis_becomes_parry_y() {
+        // A point on the URDF cylinder's z axis, 0.2 m out, must be on parry's local y axis.
+        let fix = urdf_axis_fix();
+        let local = fix.inverse_transform_point(Vec3::new(0.0, 0.0, 0.2));
+        assert!(
+            (local - Vec3::new(0.0, 0.2, 0.0)).length() < 1e-12,
+            "{local}"
+        );
+        let r = arm();
+        let built = link_obstacles("upper", &r.collision_shapes()[1], &Pose::IDENTITY).unwrap();
+        assert_eq!(built.len(), 1);
+        let (o, _) = &built[0];
+        // The cylinder spans z in [0, 0.4] in the link frame: its world AABB does too.
+        let aabb = o.shape.compute_aabb(&parry3d::math::Pose::from_parts(
+            o.pose.translation.as_vec3(),
+            o.pose.rotation.as_quat(),
+        ));
+        assert!((aabb.mins.z as f64).abs() < 1e-6 && (aabb.maxs.z as f64 - 0.4).abs() < 1e-6);
+        assert!((aabb.maxs.x as f64 - 0.05).abs() < 1e-6);
+    }
+
+    #[test]
+    fn joint_stream_drops_bad_messages_and_interpolates() {
+        let r = arm();
+        let input = |names: &[&str], p: f64| JointInput {
+            names: names.iter().map(|s| s.to_string()).collect(),
+            positions: vec![p],
+            velocities: None,
+        };
+        let msgs = vec![
+            (5_000_000_000, input(&["shoulder"], 0.0)),
+            (5_500_000_000, input(&["elbow"], 1.0)),
+            (5_600_000_000, input(&["shoulder"], f64::NAN)),
+            (6_000_000_000, input(&["shoulder"], 1.0)),
+            (5_900_000_000, input(&["shoulder"], 9.0)),
+        ];
+        let (stream, dropped) = joint_stream(&r, msgs);
+        assert_eq!(dropped, 3);
+        assert_eq!(stream.len(), 2);
+        assert_eq!(stream[1].0, 1.0);
+        let mut d = RobotDriver::new(r, String::new(), JointSource::Stream(stream));
+        let j = d.robot().joint_index("shoulder").unwrap();
+        assert!((d.positions_at(0.25).positions[j] - 0.25).abs() < 1e-12);
+        assert_eq!(d.positions_at(3.0).positions[j], 1.0);
+        d.set_source(JointSource::Still, 0.0);
+        assert_eq!(d.joint_positions().positions[j], 0.0);
+    }
+}
