@@ -30,9 +30,13 @@ enum Command {
         /// Marker layout: humble or jazzy (default: $ROS_DISTRO, else jazzy).
         #[arg(long)]
         distro: Option<String>,
-        /// Frame id of the published cloth.
-        #[arg(long, default_value = "world")]
-        frame_id: String,
+        /// Frame id of the published cloth (default: the robot's root link, else `world`).
+        #[arg(long)]
+        frame_id: Option<String>,
+        /// Drive the scene's robot from the `/joint_states` of this rosbag2 MCAP file instead
+        /// of the scene's trajectory.
+        #[arg(long)]
+        joints: Option<PathBuf>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -61,8 +65,9 @@ fn run(cli: Cli) -> Result<()> {
             duration,
             distro,
             frame_id,
+            joints,
             quiet,
-        } => record(scene, out, duration, distro, frame_id, quiet),
+        } => record(scene, out, duration, distro, frame_id, joints, quiet),
         Command::Check { scene } => {
             let s = drape::scene::Scene::load(&scene)?;
             let sim = s.build()?;
@@ -87,10 +92,11 @@ fn record(
     out: PathBuf,
     duration: Option<f64>,
     distro: Option<String>,
-    frame_id: String,
+    frame_id: Option<String>,
+    joints: Option<PathBuf>,
     quiet: bool,
 ) -> Result<()> {
-    use drape::ros::record::{record, RecordOptions};
+    use drape::ros::record::{record_with_robot, RecordOptions};
     use drape::ros::Distro;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
@@ -102,6 +108,16 @@ fn record(
             .map_err(|e| anyhow::anyhow!("--distro: {e}"))?,
         None => Distro::from_env().map_err(|e| anyhow::anyhow!("ROS_DISTRO: {e}"))?,
     };
+    let (mut sim, mut driver) = scene.build_with_robot()?;
+    if let Some(bag) = &joints {
+        let d = driver
+            .as_mut()
+            .ok_or_else(|| anyhow::anyhow!("--joints: the scene has no robot"))?;
+        drive_from_bag(d, bag)?;
+    }
+    let frame_id = frame_id
+        .or_else(|| driver.as_ref().map(|d| d.root_link().to_string()))
+        .unwrap_or_else(|| "world".into());
     let opts = RecordOptions {
         duration: duration.unwrap_or(scene.duration),
         publish_rate: scene.publish_rate,
@@ -109,7 +125,6 @@ fn record(
         frame_id,
         ..RecordOptions::default()
     };
-    let mut sim = scene.build()?;
 
     // Ctrl-C and SIGTERM ask the loop to stop; the bag is then finished, not cut.
     let stop = Arc::new(AtomicBool::new(false));
@@ -128,7 +143,7 @@ fn record(
     );
     let start = sim.time();
     let total = opts.duration;
-    let summary = record(&mut sim, &out, &opts, &stop, |t| {
+    let summary = record_with_robot(&mut sim, driver.as_mut(), &out, &opts, &stop, |t| {
         bar.set_position(((t - start) * 1000.0) as u64);
         bar.set_message(format!("{:.2}/{total:.2} s simulated", t - start));
     })
@@ -154,5 +169,37 @@ fn record(
             ""
         }
     );
+    Ok(())
+}
+
+/// Replaces the scene trajectory with the bag's `/joint_states` (time 0 = first message).
+#[cfg(feature = "ros")]
+fn drive_from_bag(d: &mut drape::robot::RobotDriver, bag: &std::path::Path) -> Result<()> {
+    use drape::robot::{joint_stream, JointInput, JointSource};
+    let msgs = drape::ros::read_joint_states(bag)
+        .with_context(|| format!("--joints {}", bag.display()))?;
+    let inputs = msgs.into_iter().map(|(ns, m)| {
+        let velocities = (!m.velocity.is_empty()).then_some(m.velocity);
+        let input = JointInput {
+            names: m.name,
+            positions: m.position,
+            velocities,
+        };
+        (ns, input)
+    });
+    let (stream, dropped) = joint_stream(d.robot(), inputs);
+    if stream.is_empty() {
+        anyhow::bail!(
+            "--joints {}: no usable /joint_states message ({dropped} dropped)",
+            bag.display()
+        );
+    }
+    log::info!(
+        "--joints {}: {} joint states over {:.2} s ({dropped} dropped)",
+        bag.display(),
+        stream.len(),
+        stream.last().map_or(0.0, |s| s.0)
+    );
+    d.set_source(JointSource::Stream(stream), 0.0);
     Ok(())
 }

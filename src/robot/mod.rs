@@ -1,11 +1,13 @@
 //! Robots from URDF: kinematic tree, forward kinematics, joint inputs, and per-link collision
 //! geometry for the collision stage.
 
+pub mod driver;
 pub mod joint_input;
 pub mod kinematics;
 pub mod resolve;
 pub mod urdf;
 
+pub use driver::{joint_stream, JointSource, RobotDriver};
 pub use joint_input::{
     apply_free_poses, JointInput, JointInputError, JointTrajectory, TrajectoryError,
     TrajectoryPoint,

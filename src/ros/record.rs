@@ -2,8 +2,15 @@
 //! publish rate to a rosbag2 MCAP file. The file is always finished, also on a stop request
 //! (Ctrl-C) and on a simulation error, so it is never left unreadable.
 
-use crate::ros::msg::{ColorRGBA, Marker, PointCloud2, Time};
-use crate::ros::{mesh_marker, point_cloud, BagError, BagWriter, Distro, TopicId};
+use crate::robot::RobotDriver;
+use crate::ros::msg::{
+    ColorRGBA, Header, JointState, Marker, PointCloud2, RosString, TFMessage, Time, Transform,
+    TransformStamped,
+};
+use crate::ros::{
+    mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro, Durability,
+    Reliability, TopicId,
+};
 use crate::sim::{DivergenceError, Simulation};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -64,12 +71,28 @@ pub enum RecordError {
 struct Topics {
     mesh: TopicId,
     points: TopicId,
+    /// `/joint_states` and `/tf` when a robot is recorded.
+    robot: Option<(TopicId, TopicId)>,
 }
 
 /// Runs `sim` and records it to `out`. `stop` is polled every step; `progress` gets the simulated
 /// time after each step.
 pub fn record(
     sim: &mut Simulation,
+    out: &Path,
+    opts: &RecordOptions,
+    stop: &AtomicBool,
+    progress: impl FnMut(f64),
+) -> Result<RecordSummary, RecordError> {
+    record_with_robot(sim, None, out, opts, stop, progress)
+}
+
+/// [`record`] with a robot: `driver.advance` runs before every step, and the bag also carries
+/// `/joint_states`, `/tf` (every link in the root link frame) at the publish rate and
+/// `/robot_description` once, offered transient-local so a late subscriber gets it.
+pub fn record_with_robot(
+    sim: &mut Simulation,
+    driver: Option<&mut RobotDriver>,
     out: &Path,
     opts: &RecordOptions,
     stop: &AtomicBool,
@@ -88,15 +111,32 @@ pub fn record(
         )));
     }
     let mut bag = BagWriter::create(out)?;
-    let topics = Topics {
+    let mut topics = Topics {
         mesh: bag.add_topic::<Marker>(&format!("{}/mesh", opts.topic_prefix), opts.distro, None)?,
         points: bag.add_topic::<PointCloud2>(
             &format!("{}/points", opts.topic_prefix),
             opts.distro,
             None,
         )?,
+        robot: None,
     };
-    let result = run(sim, &mut bag, &topics, opts, stop, &mut progress);
+    if let Some(d) = driver.as_deref() {
+        let latched = offered_qos_profiles(Reliability::Reliable, Durability::TransientLocal);
+        let desc = bag.add_topic::<RosString>("/robot_description", opts.distro, Some(&latched))?;
+        let ns = (sim.time() * 1e9).round().max(0.0) as u64;
+        bag.write(
+            desc,
+            ns,
+            &RosString {
+                data: d.urdf_text().to_string(),
+            },
+        )?;
+        topics.robot = Some((
+            bag.add_topic::<JointState>("/joint_states", opts.distro, None)?,
+            bag.add_topic::<TFMessage>("/tf", opts.distro, None)?,
+        ));
+    }
+    let result = run(sim, driver, &mut bag, &topics, opts, stop, &mut progress);
     // Finish the file whatever happened; a finish error wins only if the run itself succeeded.
     let finished = bag.finish();
     let summary = result?;
@@ -106,6 +146,7 @@ pub fn record(
 
 fn run(
     sim: &mut Simulation,
+    mut driver: Option<&mut RobotDriver>,
     bag: &mut BagWriter,
     topics: &Topics,
     opts: &RecordOptions,
@@ -116,13 +157,16 @@ fn run(
     let period = 1.0 / opts.publish_rate;
     let t_end = sim.time() + opts.duration;
     let eps = 1e-9 * sim.settings.dt;
-    write_frame(sim, bag, topics, opts)?;
+    write_frame(sim, driver.as_deref(), bag, topics, opts)?;
     s.frames_written += 1;
     let mut next_publish = sim.time() + period;
     while sim.time() + eps < t_end {
         if stop.load(Ordering::Relaxed) {
             s.interrupted = true;
             break;
+        }
+        if let Some(d) = driver.as_deref_mut() {
+            d.advance(sim, sim.time() + sim.settings.dt);
         }
         let m = sim.step().map_err(|error| RecordError::Diverged {
             error,
@@ -131,7 +175,7 @@ fn run(
         s.steps += 1;
         s.subdivisions += m.subdivisions as u64;
         if sim.time() + eps >= next_publish {
-            write_frame(sim, bag, topics, opts)?;
+            write_frame(sim, driver.as_deref(), bag, topics, opts)?;
             s.frames_written += 1;
             // Skip publish instants a long frame step jumped over rather than bunching them.
             while next_publish <= sim.time() + eps {
@@ -146,6 +190,7 @@ fn run(
 
 fn write_frame(
     sim: &Simulation,
+    driver: Option<&RobotDriver>,
     bag: &mut BagWriter,
     topics: &Topics,
     opts: &RecordOptions,
@@ -166,5 +211,48 @@ fn write_frame(
     bag.write(topics.mesh, ns, &marker)?;
     let cloud = point_cloud(stamp, &opts.frame_id, &c.x, &c.vertex_normals());
     bag.write(topics.points, ns, &cloud)?;
+    if let (Some(d), Some((joints, tf))) = (driver, topics.robot) {
+        bag.write(joints, ns, &joint_state(d, stamp))?;
+        bag.write(tf, ns, &tf_message(d, stamp))?;
+    }
     Ok(())
+}
+
+/// Every scalar joint (mimics included) at the position FK used.
+fn joint_state(d: &RobotDriver, stamp: Time) -> JointState {
+    let kin = d.robot().kinematics();
+    let q = d.joint_positions();
+    let mut msg = JointState {
+        header: Header::new(stamp, ""),
+        ..JointState::default()
+    };
+    for (ji, j) in kin.joints().iter().enumerate() {
+        if j.kind.is_scalar() {
+            msg.name.push(j.name.clone());
+            msg.position.push(kin.effective_position(q, ji).0);
+        }
+    }
+    msg
+}
+
+/// Pose of every non-root link in the root link frame.
+fn tf_message(d: &RobotDriver, stamp: Time) -> TFMessage {
+    let kin = d.robot().kinematics();
+    let root = kin.root_link();
+    let header = Header::new(stamp, d.root_link());
+    let transforms = d
+        .link_poses()
+        .iter()
+        .enumerate()
+        .filter(|(l, _)| *l != root)
+        .map(|(l, p)| TransformStamped {
+            header: header.clone(),
+            child_frame_id: kin.links()[l].clone(),
+            transform: Transform {
+                translation: p.translation.into(),
+                rotation: p.rotation.into(),
+            },
+        })
+        .collect();
+    TFMessage { transforms }
 }

@@ -1,6 +1,6 @@
 //! Turns a validated [`Scene`] into a [`Simulation`]. Only the effects the scene lists are built.
 
-use super::{EffectKind, Scene, SceneError, Selection};
+use super::{EffectKind, RobotSpec, Scene, SceneError, Selection};
 use crate::cloth::topology::{bending_stencils, springs, twist_stencils, SpringKind};
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
@@ -8,6 +8,10 @@ use crate::effects::{
     AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion, Wind,
 };
 use crate::integrate::ImplicitSettings;
+use crate::robot::driver::link_obstacles;
+use crate::robot::{
+    JointInputError, JointSource, JointTrajectory, Robot, RobotDriver, TrajectoryError, UrdfOptions,
+};
 use crate::sim::{Frames, Simulation, StepSettings};
 use crate::Vec3;
 
@@ -34,6 +38,15 @@ pub fn select(piece: &Piece, s: &Selection) -> Vec<u32> {
 }
 
 pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
+    build_with_robot(scene).map(|(sim, _)| sim)
+}
+
+/// Builds the simulation and the driver of the scene's robot (if any).
+pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver>), SceneError> {
+    let mut driver = match &scene.robot {
+        Some(r) => Some(load_robot(scene, r)?),
+        None => None,
+    };
     let mut cloth = Cloth::new();
     for c in &scene.cloths {
         let panel = Panel::grid(
@@ -69,6 +82,9 @@ pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
                 cloth.attach(v, frame, &pose);
             }
         }
+        if let (Some(r), Some(d)) = (&scene.robot, driver.as_mut()) {
+            attach_to_links(scene, r, d, ci, &piece, &mut cloth, &mut frames)?;
+        }
         if c.pins
             .iter()
             .cloned()
@@ -90,7 +106,7 @@ pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
         guard: scene.solver.guard,
     };
     let collision = if scene.needs_collision() {
-        Some(build_collision(scene, &cloth)?)
+        Some(build_collision(scene, &cloth, driver.as_mut())?)
     } else {
         None
     };
@@ -98,10 +114,139 @@ pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
     if let Some(stage) = collision {
         sim.set_collision(stage);
     }
-    Ok(sim)
+    Ok((sim, driver))
 }
 
-fn build_collision(scene: &Scene, cloth: &Cloth) -> Result<CollisionStage, SceneError> {
+fn invalid(scene: &Scene, key: String, reason: String) -> SceneError {
+    SceneError::Invalid {
+        origin: scene.name.clone(),
+        key,
+        reason,
+    }
+}
+
+/// Loads the URDF (relative to the scene file) and checks the trajectory's joint names against it.
+fn load_robot(scene: &Scene, r: &RobotSpec) -> Result<RobotDriver, SceneError> {
+    let path = scene.base_dir.clone().unwrap_or_default().join(&r.urdf);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        invalid(
+            scene,
+            "robot.urdf".into(),
+            format!("cannot read {}: {e}", path.display()),
+        )
+    })?;
+    let options = UrdfOptions {
+        visual_fallback: r.visual_fallback,
+        ..UrdfOptions::default()
+    };
+    let robot = Robot::from_urdf_str(&text, path.parent(), &options).map_err(|e| {
+        invalid(
+            scene,
+            "robot.urdf".into(),
+            format!("{}: {e}", path.display()),
+        )
+    })?;
+    let source = match &r.trajectory {
+        Some(tr) => {
+            tr.validate(robot.kinematics())
+                .map_err(|e| trajectory_error(scene, tr, e))?;
+            JointSource::Trajectory(tr.clone())
+        }
+        None => JointSource::Still,
+    };
+    Ok(RobotDriver::new(robot, text, source))
+}
+
+/// Key path of a trajectory error: the name or the value at fault.
+fn trajectory_error(scene: &Scene, tr: &JointTrajectory, e: TrajectoryError) -> SceneError {
+    let base = "robot.trajectory";
+    let name_key = |name: &str, nth: usize| {
+        let k = tr
+            .names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.as_str() == name)
+            .map(|(k, _)| k)
+            .nth(nth)
+            .unwrap_or(0);
+        format!("{base}.names[{k}]")
+    };
+    let key = match &e {
+        TrajectoryError::NoPoints => format!("{base}.points"),
+        TrajectoryError::Length { index, .. } => format!("{base}.points[{index}].positions"),
+        TrajectoryError::Time { index, .. } => format!("{base}.points[{index}].t"),
+        TrajectoryError::Input { index, source } => match source {
+            JointInputError::UnknownJoint(n) => name_key(n, 0),
+            JointInputError::Duplicate(n) => name_key(n, 1),
+            JointInputError::NotFinite { name, .. } => {
+                let k = tr.names.iter().position(|x| x == name).unwrap_or(0);
+                format!("{base}.points[{index}].positions[{k}]")
+            }
+            _ => format!("{base}.points[{index}]"),
+        },
+    };
+    let reason = match e {
+        TrajectoryError::Input { source, .. } => source.to_string(),
+        other => other.to_string(),
+    };
+    invalid(scene, key, reason)
+}
+
+/// Attaches the cloth's selected vertices to their links (one frame per link), keeping offsets.
+fn attach_to_links(
+    scene: &Scene,
+    r: &RobotSpec,
+    driver: &mut RobotDriver,
+    ci: usize,
+    piece: &Piece,
+    cloth: &mut Cloth,
+    frames: &mut Frames,
+) -> Result<(), SceneError> {
+    let cloth_name = &scene.cloths[ci].name;
+    for (k, a) in r.attach.iter().enumerate() {
+        if &a.cloth != cloth_name {
+            continue;
+        }
+        let link = driver.robot().link_index(&a.link).ok_or_else(|| {
+            invalid(
+                scene,
+                format!("robot.attach[{k}].link"),
+                format!("the robot has no link named '{}'", a.link),
+            )
+        })?;
+        let pose = driver.link_poses()[link];
+        let frame = match driver.frame_of(link) {
+            Some(f) => f,
+            None => {
+                let f = frames.add(&format!("robot:{}", a.link), pose);
+                driver.bind_frame(link, f);
+                f
+            }
+        };
+        let mut sel = a.selection();
+        if let Some(near) = sel.near.as_mut() {
+            near.point = pose.transform_point(Vec3::from(near.point)).into();
+        }
+        let picked = select(piece, &sel);
+        if picked.is_empty() {
+            return Err(invalid(
+                scene,
+                format!("robot.attach[{k}]"),
+                format!("selects no vertex of cloth '{cloth_name}'"),
+            ));
+        }
+        for v in picked {
+            cloth.attach(v, frame, &pose);
+        }
+    }
+    Ok(())
+}
+
+fn build_collision(
+    scene: &Scene,
+    cloth: &Cloth,
+    driver: Option<&mut RobotDriver>,
+) -> Result<CollisionStage, SceneError> {
     let origin = || scene.name.clone();
     let base = scene.base_dir.clone().unwrap_or_default();
     let mut obstacles = Vec::with_capacity(scene.obstacles.len());
@@ -116,6 +261,24 @@ fn build_collision(scene: &Scene, cloth: &Cloth) -> Result<CollisionStage, Scene
                 reason: e.to_string(),
             })?;
         obstacles.push(o);
+    }
+    if let Some(d) = driver {
+        let poses = d.link_poses().to_vec();
+        let names = d.robot().link_names().to_vec();
+        let shapes = d.robot().collision_shapes().to_vec();
+        for (link, link_shapes) in shapes.iter().enumerate() {
+            let built = link_obstacles(&names[link], link_shapes, &poses[link]).map_err(|e| {
+                invalid(
+                    scene,
+                    "robot.urdf".into(),
+                    format!("link `{}`: {e}", names[link]),
+                )
+            })?;
+            for (o, local) in built {
+                d.bind_obstacle(link, obstacles.len(), local);
+                obstacles.push(o);
+            }
+        }
     }
     CollisionStage::new(
         scene.collision.settings(),

@@ -13,7 +13,7 @@
 mod build;
 mod validate;
 
-pub use build::build;
+pub use build::{build, build_with_robot};
 
 use crate::cloth::{GridRegion, Material};
 use crate::collide::{CollisionSpec, ObstacleSpec};
@@ -239,6 +239,9 @@ pub struct Scene {
     /// Rigid obstacles (scripted or robot-driven).
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,
+    /// A robot from URDF: its links become external obstacles, cloth can attach to links.
+    #[serde(default)]
+    pub robot: Option<RobotSpec>,
     /// Collision detection and response; without obstacles and self-collision no collision
     /// structure is built at all.
     #[serde(default)]
@@ -246,6 +249,51 @@ pub struct Scene {
     /// Folder relative mesh paths are resolved against (the scene file's folder).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
+}
+
+/// `robot: { urdf: bot.urdf, trajectory: {names, points}, visual_fallback, attach: [..] }`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// URDF file, relative to the scene file. Its root link is the world frame of the scene.
+    pub urdf: String,
+    /// Scripted joint motion; without it the robot holds its zero configuration.
+    #[serde(default)]
+    pub trajectory: Option<crate::robot::JointTrajectory>,
+    /// Use a link's visual geometry when it has no collision element.
+    #[serde(default)]
+    pub visual_fallback: bool,
+    #[serde(default)]
+    pub attach: Vec<RobotAttachSpec>,
+}
+
+/// Cloth vertices held by a link, keeping their offset: `{ cloth: towel, link: hand,
+/// region: top_left }`. `near.point` is in the **link** frame (at t = 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotAttachSpec {
+    pub cloth: String,
+    pub link: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<GridRegion>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near: Option<Near>,
+}
+
+impl RobotAttachSpec {
+    /// The selection with `near` still in the link frame.
+    pub fn selection(&self) -> Selection {
+        Selection {
+            vertex: self.vertex,
+            vertices: self.vertices.clone(),
+            region: self.region,
+            near: self.near,
+        }
+    }
 }
 
 fn duration() -> f64 {
@@ -305,15 +353,24 @@ impl Scene {
 
     /// Whether this scene needs a collision stage at all.
     pub fn needs_collision(&self) -> bool {
-        !self.obstacles.is_empty() || self.collision.self_collision
+        !self.obstacles.is_empty() || self.collision.self_collision || self.robot.is_some()
     }
 
     pub fn has(&self, e: EffectKind) -> bool {
         self.effects.contains(&e)
     }
 
-    /// Builds the simulation this scene describes.
+    /// Builds the simulation this scene describes. A robot stays in its t = 0 pose: use
+    /// [`Scene::build_with_robot`] to get the driver that moves it.
     pub fn build(&self) -> Result<crate::sim::Simulation, SceneError> {
         build(self)
+    }
+
+    /// Builds the simulation and, when the scene has a `robot:` section, the driver that moves
+    /// the robot's obstacles and attachment frames (call `driver.advance` before each step).
+    pub fn build_with_robot(
+        &self,
+    ) -> Result<(crate::sim::Simulation, Option<crate::robot::RobotDriver>), SceneError> {
+        build_with_robot(self)
     }
 }

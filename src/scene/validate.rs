@@ -170,6 +170,7 @@ impl Scene {
                 check_selection(&key(&format!("attach[{k}]")), &a.selection(), n)?;
             }
         }
+        self.validate_robot()?;
         crate::collide::validate_obstacles(&self.obstacles, "obstacles")
             .map_err(|e| (e.path, e.message))?;
         self.collection_check()?;
@@ -184,6 +185,62 @@ impl Scene {
 }
 
 impl Scene {
+    /// Checks of the `robot:` section that need no URDF; joint and link names are checked
+    /// against the URDF when the scene is built.
+    fn validate_robot(&self) -> Result<(), Invalid> {
+        let Some(r) = &self.robot else {
+            return Ok(());
+        };
+        if r.urdf.trim().is_empty() {
+            return Err(("robot.urdf".into(), "must name a URDF file".into()));
+        }
+        if let Some(tr) = &r.trajectory {
+            if tr.points.is_empty() {
+                return Err((
+                    "robot.trajectory.points".into(),
+                    "needs at least one point".into(),
+                ));
+            }
+            for (k, p) in tr.points.iter().enumerate() {
+                let key = |f: &str| format!("robot.trajectory.points[{k}].{f}");
+                if p.positions.len() != tr.names.len() {
+                    return Err((
+                        key("positions"),
+                        format!(
+                            "{} values for {} joint names",
+                            p.positions.len(),
+                            tr.names.len()
+                        ),
+                    ));
+                }
+                if let Some(j) = p.positions.iter().position(|x| !x.is_finite()) {
+                    return Err((
+                        format!("{}[{j}]", key("positions")),
+                        "must be finite".into(),
+                    ));
+                }
+                if !p.t.is_finite() || (k > 0 && p.t <= tr.points[k - 1].t) {
+                    return Err((
+                        key("t"),
+                        format!("times must be finite and increase (got {})", p.t),
+                    ));
+                }
+            }
+        }
+        for (k, a) in r.attach.iter().enumerate() {
+            let key = format!("robot.attach[{k}]");
+            let Some(c) = self.cloths.iter().find(|c| c.name == a.cloth) else {
+                return Err((
+                    format!("{key}.cloth"),
+                    format!("no cloth named '{}'", a.cloth),
+                ));
+            };
+            let n = c.grid.resolution[0].saturating_mul(c.grid.resolution[1]);
+            check_selection(&key, &a.selection(), n)?;
+        }
+        Ok(())
+    }
+
     fn collection_check(&self) -> Result<(), Invalid> {
         self.collision
             .validate("collision")
