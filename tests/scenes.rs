@@ -286,7 +286,8 @@ fn attached_vertices_follow_a_moving_frame_exactly() {
     )
     .unwrap()];
     scene.cloths[0].pins = vec![serde_yaml_ng::from_str("{ region: top_left }").unwrap()];
-    scene.cloths[0].attach = vec![serde_yaml_ng::from_str("{ frame: handle, region: top_right }").unwrap()];
+    scene.cloths[0].attach =
+        vec![serde_yaml_ng::from_str("{ frame: handle, region: top_right }").unwrap()];
     let spec = scene.frames[0].clone();
     // The frame origin sits 10 cm from the attached corner, so its rotation moves the vertex too.
     let mut sim = scene.build().unwrap();
@@ -303,9 +304,16 @@ fn attached_vertices_follow_a_moving_frame_exactly() {
         sim.step().unwrap();
         let want = spec.pose_at(sim.time()).transform_point(local);
         let err = (sim.cloth.x[vertex] - want).length();
-        assert!(err < 1e-9, "attached vertex off its frame by {err} m at t = {}", sim.time());
+        assert!(
+            err < 1e-9,
+            "attached vertex off its frame by {err} m at t = {}",
+            sim.time()
+        );
     }
     // The rest of the cloth follows (it is dragged along +y).
     let mean_y = sim.cloth.x.iter().map(|x| x.y).sum::<f64>() / sim.cloth.len() as f64;
-    assert!(mean_y > 0.05, "cloth did not follow the handle (mean y {mean_y})");
+    assert!(
+        mean_y > 0.05,
+        "cloth did not follow the handle (mean y {mean_y})"
+    );
 }

@@ -13,7 +13,7 @@ mod wind;
 pub use damping::{AirDrag, SpringDamping, VelocityDiffusion};
 pub use gravity::Gravity;
 pub use springs::Springs;
-pub use stencils::{Bending, Twist};
+pub use stencils::{Bending, StencilSet, Twist};
 pub use wind::{Gust, Wind, WindKey};
 
 use crate::integrate::{BlockCsr, PatternBuilder};

@@ -10,11 +10,39 @@ use crate::cloth::topology::Stencil;
 use crate::integrate::{BlockCsr, PatternBuilder};
 use crate::{Mat3, Vec3};
 
-/// A set of stencils of one size with one rigidity per stencil.
-struct StencilSet<const N: usize> {
+/// A set of stencils of one size with one rigidity per stencil: bending (`N = 3`) or twist (`N = 4`).
+pub struct StencilSet<const N: usize> {
+    name: &'static str,
     stencils: Vec<Stencil<N>>,
     c: Vec<f64>,
     parameter: String,
+}
+
+/// Second derivative along warp and/or weft.
+pub type Bending = StencilSet<3>;
+/// The mixed second derivative `d2r/du dv`.
+pub type Twist = StencilSet<4>;
+
+impl Bending {
+    pub fn new(stencils: Vec<Stencil<3>>, rigidity: Vec<f64>, parameter: String) -> Self {
+        StencilSet {
+            name: "bending",
+            stencils,
+            c: rigidity,
+            parameter,
+        }
+    }
+}
+
+impl Twist {
+    pub fn new(stencils: Vec<Stencil<4>>, rigidity: Vec<f64>, parameter: String) -> Self {
+        StencilSet {
+            name: "twist",
+            stencils,
+            c: rigidity,
+            parameter,
+        }
+    }
 }
 
 impl<const N: usize> StencilSet<N> {
@@ -82,70 +110,23 @@ impl<const N: usize> StencilSet<N> {
     }
 }
 
-/// Bending along one material direction (warp or weft stencils, or both in one set).
-pub struct Bending(StencilSet<3>);
-
-impl Bending {
-    pub fn new(stencils: Vec<Stencil<3>>, rigidity: Vec<f64>, parameter: String) -> Self {
-        Self(StencilSet {
-            stencils,
-            c: rigidity,
-            parameter,
-        })
-    }
-}
-
-impl Effect for Bending {
+impl<const N: usize> Effect for StencilSet<N> {
     fn name(&self) -> &'static str {
-        "bending"
+        self.name
     }
     fn declare(&self, p: &mut PatternBuilder) {
-        self.0.declare(p)
+        StencilSet::declare(self, p)
     }
     fn add_forces(&self, s: &State, f: &mut [Vec3]) {
-        self.0.add_forces(s.x, f)
+        StencilSet::add_forces(self, s.x, f)
     }
     fn add_jacobians(&self, _s: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
-        self.0.add_jacobians(dfdx)
+        StencilSet::add_jacobians(self, dfdx)
     }
     fn energy(&self, x: &[Vec3]) -> f64 {
-        self.0.energy(x)
+        StencilSet::energy(self, x)
     }
     fn stiffness(&self, mass: &[f64]) -> Option<StiffnessBound> {
-        self.0.stiffness(mass)
-    }
-}
-
-/// Twist: the mixed second derivative `d2r/du dv`.
-pub struct Twist(StencilSet<4>);
-
-impl Twist {
-    pub fn new(stencils: Vec<Stencil<4>>, rigidity: Vec<f64>, parameter: String) -> Self {
-        Self(StencilSet {
-            stencils,
-            c: rigidity,
-            parameter,
-        })
-    }
-}
-
-impl Effect for Twist {
-    fn name(&self) -> &'static str {
-        "twist"
-    }
-    fn declare(&self, p: &mut PatternBuilder) {
-        self.0.declare(p)
-    }
-    fn add_forces(&self, s: &State, f: &mut [Vec3]) {
-        self.0.add_forces(s.x, f)
-    }
-    fn add_jacobians(&self, _s: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
-        self.0.add_jacobians(dfdx)
-    }
-    fn energy(&self, x: &[Vec3]) -> f64 {
-        self.0.energy(x)
-    }
-    fn stiffness(&self, mass: &[f64]) -> Option<StiffnessBound> {
-        self.0.stiffness(mass)
+        StencilSet::stiffness(self, mass)
     }
 }
