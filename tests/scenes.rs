@@ -78,7 +78,7 @@ fn folds(sim: &Simulation) -> Folds {
     let c = &sim.cloth;
     let l = c.pieces[0].panel.lattice.as_ref().unwrap();
     let normals = c.vertex_normals();
-    let at = |i: usize, j: usize| (j * l.nu + i) as usize;
+    let at = |i: usize, j: usize| j * l.nu + i;
     // Normal curvature along one direction; tiny values (below 1% of 1/size) count as flat so that
     // numerical noise on a flat sheet is not a fold.
     let curv = |a: usize, b: usize, cc: usize, h: f64| {

@@ -1,6 +1,8 @@
 //! The `drape` command line.
 
-use anyhow::{Context, Result};
+#[cfg(feature = "ros")]
+use anyhow::Context;
+use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 

@@ -53,7 +53,10 @@ pub enum RecordError {
     Bag(#[from] BagError),
     /// The simulation diverged; the bag holds everything up to the last good frame.
     #[error("{error} (the bag was finished with {frames} frames before the failure)")]
-    Diverged { error: DivergenceError, frames: u64 },
+    Diverged {
+        error: Box<DivergenceError>,
+        frames: u64,
+    },
     #[error("invalid recording option: {0}")]
     Options(String),
 }

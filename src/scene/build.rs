@@ -3,6 +3,7 @@
 use super::{EffectKind, Scene, SceneError, Selection};
 use crate::cloth::topology::{bending_stencils, springs, twist_stencils, SpringKind};
 use crate::cloth::{Cloth, Panel, Piece};
+use crate::collide::CollisionStage;
 use crate::effects::{
     AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion, Wind,
 };
@@ -35,7 +36,12 @@ pub fn select(piece: &Piece, s: &Selection) -> Vec<u32> {
 pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
     let mut cloth = Cloth::new();
     for c in &scene.cloths {
-        let panel = Panel::grid(&c.name, c.grid.size, c.grid.resolution, &c.grid.pose.pose());
+        let panel = Panel::grid(
+            &c.name,
+            c.grid.size,
+            c.grid.resolution,
+            &c.grid.pose.to_pose(),
+        );
         cloth.add_panel(panel, c.material);
     }
 
@@ -83,9 +89,47 @@ pub fn build(scene: &Scene) -> Result<Simulation, SceneError> {
         substeps: scene.solver.substeps,
         guard: scene.solver.guard,
     };
-    Ok(Simulation::new(
-        cloth, effects, integrator, frames, settings,
-    ))
+    let collision = if scene.needs_collision() {
+        Some(build_collision(scene, &cloth)?)
+    } else {
+        None
+    };
+    let mut sim = Simulation::new(cloth, effects, integrator, frames, settings);
+    if let Some(stage) = collision {
+        sim.set_collision(stage);
+    }
+    Ok(sim)
+}
+
+fn build_collision(scene: &Scene, cloth: &Cloth) -> Result<CollisionStage, SceneError> {
+    let origin = || scene.name.clone();
+    let base = scene.base_dir.clone().unwrap_or_default();
+    let mut obstacles = Vec::with_capacity(scene.obstacles.len());
+    for (i, spec) in scene.obstacles.iter().enumerate() {
+        let o = spec
+            .build(|path: &str| {
+                crate::mesh::load_mesh(&base.join(path), Vec3::ONE).map(|m| (m.vertices, m.indices))
+            })
+            .map_err(|e| SceneError::Invalid {
+                origin: origin(),
+                key: format!("obstacles[{i}]"),
+                reason: e.to_string(),
+            })?;
+        obstacles.push(o);
+    }
+    CollisionStage::new(
+        scene.collision.settings(),
+        obstacles,
+        cloth.triangles.clone(),
+        cloth.len(),
+        cloth.thickness.clone(),
+        cloth.friction.clone(),
+    )
+    .map_err(|e| SceneError::Invalid {
+        origin: origin(),
+        key: "collision".into(),
+        reason: e.to_string(),
+    })
 }
 
 fn build_effects(scene: &Scene, cloth: &Cloth) -> EffectSet {

@@ -16,6 +16,7 @@ mod validate;
 pub use build::build;
 
 use crate::cloth::{GridRegion, Material};
+use crate::collide::{CollisionSpec, ObstacleSpec};
 use crate::effects::{Gust, WindKey};
 use crate::integrate::{ImplicitSettings, IntegratorKind};
 use crate::sim::GuardSettings;
@@ -43,19 +44,7 @@ pub enum EffectKind {
     Damping,
 }
 
-/// A pose as written in scene files: translation and URDF-style roll-pitch-yaw (radians).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PoseSpec {
-    pub xyz: [f64; 3],
-    pub rpy: [f64; 3],
-}
-
-impl PoseSpec {
-    pub fn pose(&self) -> Pose {
-        Pose::from_xyz_rpy(self.xyz, self.rpy)
-    }
-}
+pub use crate::collide::PoseSpec;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -216,7 +205,7 @@ pub struct FrameSpec {
 
 impl FrameSpec {
     pub fn pose_at(&self, t: f64) -> Pose {
-        let p0 = self.pose.pose();
+        let p0 = self.pose.to_pose();
         let w = Vec3::from(self.angular_velocity) * t;
         let rot = glam::DQuat::from_scaled_axis(w) * p0.rotation;
         Pose::new(
@@ -247,6 +236,16 @@ pub struct Scene {
     #[serde(default)]
     pub frames: Vec<FrameSpec>,
     pub cloths: Vec<ClothSpec>,
+    /// Rigid obstacles (scripted or robot-driven).
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Collision detection and response; without obstacles and self-collision no collision
+    /// structure is built at all.
+    #[serde(default)]
+    pub collision: CollisionSpec,
+    /// Folder relative mesh paths are resolved against (the scene file's folder).
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
 }
 
 fn duration() -> f64 {
@@ -299,7 +298,14 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::from_yaml(&text, &path.display().to_string())
+        let mut scene = Self::from_yaml(&text, &path.display().to_string())?;
+        scene.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(scene)
+    }
+
+    /// Whether this scene needs a collision stage at all.
+    pub fn needs_collision(&self) -> bool {
+        !self.obstacles.is_empty() || self.collision.self_collision
     }
 
     pub fn has(&self, e: EffectKind) -> bool {

@@ -170,6 +170,9 @@ impl Scene {
                 check_selection(&key(&format!("attach[{k}]")), &a.selection(), n)?;
             }
         }
+        crate::collide::validate_obstacles(&self.obstacles, "obstacles")
+            .map_err(|e| (e.path, e.message))?;
+        self.collection_check()?;
         if total > MAX_VERTICES {
             return Err((
                 "cloths".into(),
@@ -177,6 +180,14 @@ impl Scene {
             ));
         }
         Ok(())
+    }
+}
+
+impl Scene {
+    fn collection_check(&self) -> Result<(), Invalid> {
+        self.collision
+            .validate("collision")
+            .map_err(|e| (e.path, e.message))
     }
 }
 

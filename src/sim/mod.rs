@@ -12,6 +12,7 @@ mod guard;
 pub use guard::{DivergenceError, DivergencePolicy, GuardSettings, Symptom};
 
 use crate::cloth::{Cloth, Kinematic};
+use crate::collide::CollisionStage;
 use crate::effects::{EffectSet, State};
 use crate::integrate::{Constraints, Dynamics, Filter, Integrator, IntegratorStats};
 use crate::{Pose, Vec3};
@@ -40,6 +41,15 @@ pub struct StepMetrics {
     pub potential_energy: f64,
     pub max_speed: f64,
     pub wall_time_s: f64,
+    /// Obstacle contacts at the end of the step.
+    pub contacts: usize,
+    /// Deepest penetration into an obstacle's thickness layer over the step's substeps (m).
+    pub deepest_penetration: f64,
+    /// Intersecting non-adjacent triangle pairs at the end of the step, when counted.
+    pub self_intersections: Option<usize>,
+    /// Cloth-cloth pairs the collision fail-safe could not resolve.
+    pub unresolved_contacts: usize,
+    pub collision_time_s: f64,
 }
 
 /// Moving frames that kinematic vertices attach to. A frame step moves each frame from `start`
@@ -120,7 +130,11 @@ pub struct Simulation {
     x_save: Vec<Vec3>,
     v_save: Vec<Vec3>,
     scratch_f: Vec<Vec3>,
+    inv_mass: Vec<f64>,
     last: StepMetrics,
+    collision: Option<CollisionStage>,
+    /// Start and end pose over the current frame of obstacles driven from outside (robot links).
+    obstacle_targets: Vec<Option<(Pose, Pose)>>,
 }
 
 impl Simulation {
@@ -149,8 +163,40 @@ impl Simulation {
             x_save: Vec::new(),
             v_save: Vec::new(),
             scratch_f: Vec::new(),
+            inv_mass: Vec::new(),
             last: StepMetrics::default(),
+            collision: None,
+            obstacle_targets: Vec::new(),
         }
+    }
+
+    /// Adds the collision stage (scenes without obstacles or self-collision have none).
+    pub fn set_collision(&mut self, stage: CollisionStage) {
+        self.obstacle_targets = vec![None; stage.obstacles().len()];
+        self.collision = Some(stage);
+    }
+
+    pub fn collision(&self) -> Option<&CollisionStage> {
+        self.collision.as_ref()
+    }
+
+    /// Sets where an externally driven obstacle will be at the end of the next frame step; the
+    /// substeps see it move smoothly from its current pose. Returns false for a bad index or pose.
+    pub fn set_obstacle_target(&mut self, obstacle: usize, pose: Pose) -> bool {
+        let Some(stage) = &self.collision else {
+            return false;
+        };
+        let (Some(slot), Some(o)) = (
+            self.obstacle_targets.get_mut(obstacle),
+            stage.obstacles().get(obstacle),
+        ) else {
+            return false;
+        };
+        if !pose.is_finite() {
+            return false;
+        }
+        *slot = Some((o.pose, pose));
+        true
     }
 
     pub fn time(&self) -> f64 {
@@ -194,7 +240,7 @@ impl Simulation {
     }
 
     /// Advances one frame (`settings.dt`).
-    pub fn step(&mut self) -> Result<&StepMetrics, DivergenceError> {
+    pub fn step(&mut self) -> Result<&StepMetrics, Box<DivergenceError>> {
         let wall = Instant::now();
         let mut m = StepMetrics::default();
         let n_sub = self.settings.substeps.max(1);
@@ -212,6 +258,9 @@ impl Simulation {
         }
         for f in 0..self.frames.len() {
             self.frames.start[f] = self.frames.end[f];
+        }
+        for t in self.obstacle_targets.iter_mut() {
+            *t = None;
         }
         self.time = t0 + self.settings.dt;
         let (ke, pe) = self.energy();
@@ -241,7 +290,7 @@ impl Simulation {
         s1: f64,
         depth: u32,
         m: &mut StepMetrics,
-    ) -> Result<(), DivergenceError> {
+    ) -> Result<(), Box<DivergenceError>> {
         let n = self.cloth.len();
         // 1. Kinematic vertices: start on target, move at the constant velocity that reaches the end target.
         self.constraints = Constraints::free(n);
@@ -253,6 +302,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
+        self.contact_constraints(t);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -298,7 +348,7 @@ impl Simulation {
                     self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
                     return self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m);
                 }
-                return Err(self.divergence_error(t, h, vertex, symptom));
+                return Err(Box::new(self.divergence_error(t, h, vertex, symptom)));
             }
         }
 
@@ -306,8 +356,75 @@ impl Simulation {
         for (i, k) in &self.cloth.kinematic {
             self.cloth.x[*i as usize] = self.target(k, s1);
         }
+
+        // 5. Collisions: obstacles move over the substep, then contacts are resolved.
+        if let Some(stage) = self.collision.as_mut() {
+            stage.advance_obstacles(t, t + h);
+            for (idx, target) in self.obstacle_targets.iter().enumerate() {
+                if let Some((a, b)) = target {
+                    stage.set_obstacle_pose(idx, a.lerp(b, s1));
+                }
+            }
+            self.inv_mass.clone_from(&self.cloth.mass);
+            self.inv_mass.iter_mut().for_each(|m| *m = 1.0 / *m);
+            for (i, _) in &self.cloth.kinematic {
+                self.inv_mass[*i as usize] = 0.0;
+            }
+            let before = self.energy_cache;
+            let r = stage.resolve(
+                &self.x_save,
+                &mut self.cloth.x,
+                &mut self.cloth.v,
+                &self.inv_mass,
+                h,
+            );
+            m.contacts = r.contacts;
+            m.deepest_penetration = m.deepest_penetration.max(r.deepest_penetration);
+            m.self_intersections = match (m.self_intersections, r.self_intersections) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
+            m.unresolved_contacts += r.unresolved;
+            m.collision_time_s += r.time_s;
+            // A moving obstacle can push energy into the cloth: widen the guard's budget by it.
+            let after = self.energies();
+            if let (Some(b), Some(budget)) = (before, self.energy_budget.as_mut()) {
+                *budget += (after.0 - b.0).max(0.0);
+            }
+            self.energy_cache = Some(after);
+        }
         m.substeps += 1;
         Ok(())
+    }
+
+    /// Contacts of the last collision pass become constraints of this substep (the survey's mass
+    /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
+    /// vertex is pulled away from the surface by the other forces is released instead of held.
+    fn contact_constraints(&mut self, t: f64) {
+        let Some(stage) = &self.collision else {
+            return;
+        };
+        if !stage.settings().response.uses_filter() || stage.contacts().is_empty() {
+            return;
+        }
+        let n = self.cloth.len();
+        crate::integrate::scratch(&mut self.scratch_f, n);
+        let s = State {
+            t,
+            x: &self.cloth.x,
+            v: &self.cloth.v,
+        };
+        self.effects.forces(&s, &mut self.scratch_f);
+        for c in stage.contacts() {
+            let i = c.vertex as usize;
+            if i >= n || self.constraints.filter[i] == Filter::Fixed {
+                continue;
+            }
+            if self.scratch_f[i].dot(c.normal) <= 0.0 {
+                self.constraints.filter[i] = Filter::Direction(c.normal);
+                self.constraints.target_velocity[i] = c.surface_velocity;
+            }
+        }
     }
 
     /// Work done on the cloth during the substep by forces from outside it (wind and moving

@@ -1,0 +1,327 @@
+//! The collision stage of a simulation step: takes the integrator's candidate end-of-step
+//! positions/velocities and fixes them against obstacles and (optionally) the cloth itself.
+
+use super::obstacle::Obstacle;
+use super::respond::{obstacle_vertex, VertexInput};
+use super::self_contact::SelfCollider;
+use crate::{Pose, Vec3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// How contacts are detected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetectionMode {
+    /// Discrete: a sphere of radius `thickness` at each end-of-step vertex vs the obstacles at
+    /// their end pose, and vs other vertices' spheres. Cheapest; misses thin features and fast
+    /// motion (vertices can tunnel).
+    Spheres,
+    /// Discrete distance of each end-of-step vertex to the obstacles; cloth-cloth vertex-triangle
+    /// and edge-edge proximity. Same obstacle test as `Spheres` (a point within `thickness` of a
+    /// shape is a sphere touching it); better cloth-cloth coverage. Can still tunnel.
+    Proximity,
+    /// Swept tests over the step (obstacle motion included), then proximity. Cloth-cloth: CCD
+    /// passes plus rigid impact zones, so the cloth never ends a step self-intersecting.
+    Continuous,
+}
+
+/// How contacts are answered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResponseMode {
+    /// Positions snapped to `thickness` along the contact normal, velocities projected with
+    /// Coulomb friction, and the friction's tangential velocity change applied to positions.
+    Projection,
+    /// Velocities projected with friction; positions only pushed out of the thickness layer; the
+    /// caller feeds `contacts()` to the implicit solver's `(I - n n^T)` filter next step.
+    Filter,
+    /// Projection and the contacts for the filter.
+    Both,
+}
+
+impl ResponseMode {
+    /// Whether the implicit solver should constrain contact normals with `contacts()`.
+    pub fn uses_filter(self) -> bool {
+        matches!(self, ResponseMode::Filter | ResponseMode::Both)
+    }
+
+    pub(crate) fn projects_tangent(self) -> bool {
+        matches!(self, ResponseMode::Projection | ResponseMode::Both)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CollisionSettings {
+    pub mode: DetectionMode,
+    pub self_collision: bool,
+    pub response: ResponseMode,
+    /// Cloth-cloth passes (CCD passes in continuous mode, repulsion passes otherwise).
+    pub self_iterations: usize,
+    /// Rigid impact-zone passes before the last resort (freeze colliding vertices at x0).
+    pub zone_iterations: usize,
+    /// Count exact triangle-triangle intersections after each step (costly, for metrics).
+    pub count_self_intersections: bool,
+}
+
+impl Default for CollisionSettings {
+    fn default() -> Self {
+        Self {
+            mode: DetectionMode::Continuous,
+            self_collision: false,
+            response: ResponseMode::Both,
+            self_iterations: 8,
+            zone_iterations: 16,
+            count_self_intersections: false,
+        }
+    }
+}
+
+/// A vertex touching an obstacle at the end of the step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    pub vertex: u32,
+    /// Unit world normal pointing out of the obstacle.
+    pub normal: Vec3,
+    /// World velocity of the obstacle's surface at the contact point.
+    pub surface_velocity: Vec3,
+    /// Index into the stage's obstacles.
+    pub obstacle: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CollisionReport {
+    /// Number of obstacle contacts (see `CollisionStage::contacts`).
+    pub contacts: usize,
+    /// Deepest remaining penetration of a contact vertex into an obstacle's thickness layer after
+    /// the response (m, >= 0).
+    pub deepest_penetration: f64,
+    /// Exact count of intersecting non-adjacent triangle pairs at the end of the step, when
+    /// `count_self_intersections` is on and self-collision is enabled.
+    pub self_intersections: Option<usize>,
+    /// Cloth-cloth colliding pairs the fail-safe could not resolve (kinematic vertices involved,
+    /// or the step started intersecting).
+    pub unresolved: usize,
+    /// Wall time of `resolve`.
+    pub time_s: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StageError {
+    #[error("triangle {tri} references vertex {vertex} but the cloth has {n} vertices")]
+    BadTriangle { tri: usize, vertex: u32, n: usize },
+    #[error("{what} has {got} entries, expected one per vertex ({n})")]
+    BadLength {
+        what: &'static str,
+        got: usize,
+        n: usize,
+    },
+    #[error("{what}[{index}] = {value} must be finite and >= 0")]
+    BadValue {
+        what: &'static str,
+        index: usize,
+        value: f64,
+    },
+}
+
+pub struct CollisionStage {
+    settings: CollisionSettings,
+    obstacles: Vec<Obstacle>,
+    n_vertices: usize,
+    thickness: Vec<f64>,
+    friction: Vec<f64>,
+    contacts: Vec<Contact>,
+    /// Per-vertex scratch for one obstacle's results (reused across steps).
+    scratch: Vec<Option<Contact>>,
+    /// Per-vertex "touches an obstacle" flags, for cloth-cloth mass weighting.
+    in_contact: Vec<bool>,
+    self_collider: Option<SelfCollider>,
+}
+
+impl CollisionStage {
+    /// `triangles` index the flat particle array of all cloths; `thickness` (m, the contact radius
+    /// of each vertex) and `friction` (Coulomb mu) are per vertex.
+    pub fn new(
+        settings: CollisionSettings,
+        obstacles: Vec<Obstacle>,
+        triangles: Vec<[u32; 3]>,
+        n_vertices: usize,
+        thickness: Vec<f64>,
+        friction: Vec<f64>,
+    ) -> Result<Self, StageError> {
+        for (what, v) in [("thickness", &thickness), ("friction", &friction)] {
+            if v.len() != n_vertices {
+                return Err(StageError::BadLength {
+                    what,
+                    got: v.len(),
+                    n: n_vertices,
+                });
+            }
+            if let Some(i) = v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+                return Err(StageError::BadValue {
+                    what,
+                    index: i,
+                    value: v[i],
+                });
+            }
+        }
+        for (k, t) in triangles.iter().enumerate() {
+            if let Some(&v) = t.iter().find(|&&v| v as usize >= n_vertices) {
+                return Err(StageError::BadTriangle {
+                    tri: k,
+                    vertex: v,
+                    n: n_vertices,
+                });
+            }
+        }
+        let self_collider = settings
+            .self_collision
+            .then(|| SelfCollider::new(&triangles, n_vertices));
+        Ok(Self {
+            settings,
+            obstacles,
+            n_vertices,
+            thickness,
+            friction,
+            contacts: Vec::new(),
+            scratch: Vec::new(),
+            in_contact: vec![false; n_vertices],
+            self_collider,
+        })
+    }
+
+    pub fn settings(&self) -> &CollisionSettings {
+        &self.settings
+    }
+
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// Contacts found by the last `resolve` (for the implicit solver's filter and for metrics).
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
+    /// External obstacles keep their last pose as `pose_prev` (call `set_obstacle_pose` after).
+    pub fn advance_obstacles(&mut self, t0: f64, t1: f64) {
+        for o in &mut self.obstacles {
+            if o.motion.is_scripted() {
+                o.pose_prev = o.motion.pose_at(&o.initial_pose, t0);
+                o.pose = o.motion.pose_at(&o.initial_pose, t1);
+            } else {
+                o.pose_prev = o.pose;
+            }
+        }
+    }
+
+    /// Sets the end-of-step pose of obstacle `idx` (robot-driven). Ignored for an invalid index
+    /// or a non-finite pose (returns false).
+    pub fn set_obstacle_pose(&mut self, idx: usize, pose: Pose) -> bool {
+        match self.obstacles.get_mut(idx) {
+            Some(o) if pose.is_finite() => {
+                o.pose = pose;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Fixes candidate end-of-step positions `x1` and velocities `v1` (start positions `x0`, step
+    /// `h`). Vertices with `inv_mass == 0` are never moved.
+    pub fn resolve(
+        &mut self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        inv_mass: &[f64],
+        h: f64,
+    ) -> CollisionReport {
+        let start = Instant::now();
+        let n = self
+            .n_vertices
+            .min(x0.len())
+            .min(x1.len())
+            .min(v1.len())
+            .min(inv_mass.len());
+        self.contacts.clear();
+        self.in_contact.clear();
+        self.in_contact.resize(self.n_vertices, false);
+        let mode = self.settings.mode;
+        let response = self.settings.response;
+        let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
+        for (oi, o) in self.obstacles.iter().enumerate() {
+            let (olo, ohi) = o.swept_aabb(max_th);
+            self.scratch.clear();
+            self.scratch.resize(n, None);
+            let thickness = &self.thickness;
+            let friction = &self.friction;
+            self.scratch
+                .par_iter_mut()
+                .zip(x1[..n].par_iter_mut())
+                .zip(v1[..n].par_iter_mut())
+                .enumerate()
+                .with_min_len(256)
+                .for_each(|(i, ((out, x), v))| {
+                    if inv_mass[i] <= 0.0 {
+                        return;
+                    }
+                    let th = thickness[i];
+                    let lo = x0[i].min(*x) - Vec3::splat(th);
+                    let hi = x0[i].max(*x) + Vec3::splat(th);
+                    if lo.cmpgt(ohi).any() || hi.cmplt(olo).any() {
+                        return;
+                    }
+                    let input = VertexInput {
+                        vertex: i as u32,
+                        x0: x0[i],
+                        thickness: th,
+                        friction: o.friction.unwrap_or(friction[i]),
+                        h,
+                        mode,
+                        response,
+                    };
+                    *out = obstacle_vertex(o, oi, &input, x, v);
+                });
+            for c in self.scratch.iter().flatten() {
+                self.in_contact[c.vertex as usize] = true;
+                self.contacts.push(*c);
+            }
+        }
+
+        let mut report = CollisionReport::default();
+        if let Some(sc) = self.self_collider.as_mut() {
+            let out = sc.resolve(
+                &self.settings,
+                x0,
+                x1,
+                v1,
+                inv_mass,
+                &self.thickness,
+                &self.friction,
+                &self.in_contact,
+                h,
+            );
+            report.unresolved = out.unresolved;
+            if self.settings.count_self_intersections {
+                report.self_intersections = Some(sc.count_intersections(x1));
+            }
+        }
+
+        // Penetration after the whole response, measured on contact vertices.
+        let mut deepest: f64 = 0.0;
+        for c in &self.contacts {
+            let o = &self.obstacles[c.obstacle];
+            let i = c.vertex as usize;
+            let local = o.pose.inverse_transform_point(x1[i]);
+            let hint = o.pose_prev.inverse_transform_point(x0[i]);
+            let sp = o.closest_local(local, hint);
+            deepest = deepest.max(self.thickness[i] - sp.signed_distance);
+        }
+        report.contacts = self.contacts.len();
+        report.deepest_penetration = deepest.max(0.0);
+        report.time_s = start.elapsed().as_secs_f64();
+        report
+    }
+}
