@@ -50,6 +50,13 @@ fn quick_study_writes_complete_tables_and_plots() {
                     && field(&header, r, "integrator") == s.integrator.name()
                     && field(&header, r, "resolution") == format!("{a}x{b}")
                     && field(&header, r, "stiffness") == s.stiffness.to_string()
+                    && match s.collision {
+                        Some((m, sc)) => {
+                            field(&header, r, "collision_mode") == format!("{m:?}").to_lowercase()
+                                && field(&header, r, "self_collision") == sc.to_string()
+                        }
+                        None => matches!(field(&header, r, "collision_mode"), "scene" | "n/a"),
+                    }
                     && (field(&header, r, "dt_s").parse::<f64>().expect("dt") - s.dt()).abs()
                         < 1e-6 * s.dt()
                     && (s.integrator != drape::integrate::IntegratorKind::Implicit
@@ -73,6 +80,7 @@ fn quick_study_writes_complete_tables_and_plots() {
         "us_per_vertex_step",
         "realtime_factor",
         "cg_per_step",
+        "collision_share",
     ];
     let errors = [
         "rms_error_m",
@@ -123,6 +131,7 @@ fn quick_study_writes_complete_tables_and_plots() {
         "## Implicit against explicit",
         "## Implicit solver tolerance",
         "## Resolution",
+        "## Collision detection mode",
         "## Conclusions",
     ] {
         assert!(summary.contains(section), "summary lacks {section}");

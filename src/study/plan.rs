@@ -2,6 +2,7 @@
 
 use super::run::{Horizon, RunSettings};
 use super::scenes::StudyScene;
+use crate::collide::DetectionMode;
 use crate::integrate::IntegratorKind;
 
 /// CG settings used wherever the implicit solve is not itself the subject: tight enough that
@@ -26,12 +27,15 @@ pub struct Plan {
     pub cg_caps: Vec<u32>,
     /// Step level of the CG sweep.
     pub cg_dt_level: u32,
-    /// Resolutions of the resolution sweep; the largest only for the first scene.
+    /// Resolutions of the resolution sweep; the largest (if more than two) only for the first scene.
     pub resolutions: Vec<usize>,
     /// Step levels tried at each resolution by the explicit integrators and RK4.
     pub res_dt_levels_explicit: Vec<u32>,
     /// Step levels tried at each resolution by the implicit integrator.
     pub res_dt_levels_implicit: Vec<u32>,
+    /// Collision sweep (scenes with obstacles): integrator and step level of each run, each
+    /// tried with every detection mode, self-collision off and on.
+    pub collision_runs: Vec<(IntegratorKind, u32)>,
 }
 
 /// A run and the parts of the study it belongs to.
@@ -51,19 +55,20 @@ impl Plan {
             scenes: StudyScene::ALL.to_vec(),
             base_n: 12,
             stiffnesses: vec![1.0, 0.01],
-            dt_levels: (0..=7).collect(),
-            reference_level: 10,
+            dt_levels: (0..=6).collect(),
+            reference_level: 9,
             resolution_reference_level: 9,
             cg_tolerances: vec![1e-2, 1e-4, 1e-6],
             cg_caps: vec![5, 1000],
             cg_dt_level: 2,
-            resolutions: vec![12, 16, 24],
+            resolutions: vec![12, 16],
             res_dt_levels_explicit: vec![0, 3, 6],
             res_dt_levels_implicit: vec![0, 3],
+            collision_runs: vec![(IntegratorKind::Implicit, 0), (IntegratorKind::Implicit, 2)],
         }
     }
 
-    /// The full study: steps 1/60 to 1/61440 s, resolutions 16 to 128, 0.5 s simulated.
+    /// The full study: steps 1/60 to 1/30720 s, resolutions 16 to 64, 0.5 s simulated.
     pub fn full() -> Plan {
         Plan {
             horizon: Horizon {
@@ -72,15 +77,21 @@ impl Plan {
             scenes: StudyScene::ALL.to_vec(),
             base_n: 16,
             stiffnesses: vec![1.0, 0.1, 0.01],
-            dt_levels: (0..=10).collect(),
-            reference_level: 13,
+            dt_levels: (0..=9).collect(),
+            reference_level: 12,
             resolution_reference_level: 10,
             cg_tolerances: vec![1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
             cg_caps: vec![10, 50, 1000],
             cg_dt_level: 2,
-            resolutions: vec![16, 32, 64, 128],
+            resolutions: vec![16, 32, 64],
             res_dt_levels_explicit: vec![0, 3, 6, 9],
             res_dt_levels_implicit: vec![0, 3],
+            collision_runs: vec![
+                (IntegratorKind::Implicit, 0),
+                (IntegratorKind::Implicit, 2),
+                (IntegratorKind::Implicit, 4),
+                (IntegratorKind::SymplecticEuler, 6),
+            ],
         }
     }
 
@@ -117,6 +128,7 @@ impl Plan {
                 dt_level,
                 cg_tolerance: tol,
                 cg_max_iterations: cap,
+                collision: None,
             };
         let largest = self.resolutions.iter().copied().max().unwrap_or(0);
         for (si, &scene) in self.scenes.iter().enumerate() {
@@ -140,8 +152,27 @@ impl Plan {
                     add("cg", s);
                 }
             }
+            let collides = scene
+                .scene(self.base_n, 1.0)
+                .map(|s| !s.obstacles.is_empty())
+                .unwrap_or(false);
+            if collides {
+                for &(integ, l) in &self.collision_runs {
+                    for mode in [
+                        DetectionMode::Spheres,
+                        DetectionMode::Proximity,
+                        DetectionMode::Continuous,
+                    ] {
+                        for self_collision in [false, true] {
+                            let mut s = setting(scene, self.base_n, 1.0, integ, l, TIGHT_CG);
+                            s.collision = Some((mode, self_collision));
+                            add("collision", s);
+                        }
+                    }
+                }
+            }
             for &n in &self.resolutions {
-                if n == largest && si > 0 && self.resolutions.len() > 1 {
+                if n == largest && si > 0 && self.resolutions.len() > 2 {
                     continue;
                 }
                 for &integ in &IntegratorKind::ALL {

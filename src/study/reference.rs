@@ -66,6 +66,7 @@ pub fn reference(
             dt_level: level,
             cg_tolerance: 1e-10,
             cg_max_iterations: 1000,
+            collision: None,
         };
         let out = run(&settings, horizon)?;
         if out.diverged.is_some() {

@@ -4,12 +4,13 @@ use super::analysis::{
     cheapest_within, median, omega_max, orders, pareto, stability, theoretical_order,
 };
 use super::{RunRecord, StudyError, StudyResult};
+use crate::collide::DetectionMode;
 use crate::integrate::IntegratorKind;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Columns of `runs.csv`.
-pub const CSV_HEADER: &str = "scene,groups,integrator,dt_s,resolution,stiffness,vertices,cg_tolerance,cg_max_iterations,steps,simulated_s,wall_s,wall_per_sim_s,us_per_vertex_step,realtime_factor,cg_per_step,rms_error_m,max_error_m,final_rms_error_m,energy_drift_rel,sag_error_m,diverged,diverged_at_s,message";
+pub const CSV_HEADER: &str = "scene,groups,integrator,dt_s,resolution,stiffness,collision_mode,self_collision,vertices,cg_tolerance,cg_max_iterations,steps,simulated_s,wall_s,wall_per_sim_s,us_per_vertex_step,realtime_factor,cg_per_step,rms_error_m,max_error_m,final_rms_error_m,energy_drift_rel,sag_error_m,deepest_penetration_m,self_intersections,collision_share,diverged,diverged_at_s,message";
 
 fn write(path: PathBuf, text: &str) -> Result<PathBuf, StudyError> {
     std::fs::write(&path, text).map_err(|source| StudyError::Io {
@@ -43,6 +44,12 @@ pub fn write_csv(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError> {
             num(x.settings.dt()),
             format!("{a}x{b}"),
             x.settings.stiffness.to_string(),
+            collision_mode(x),
+            match x.settings.collision {
+                _ if !x.collides => "n/a".into(),
+                Some((_, s)) => s.to_string(),
+                None => "scene".into(),
+            },
             x.vertices.to_string(),
             if implicit {
                 num(x.settings.cg_tolerance)
@@ -66,6 +73,17 @@ pub fn write_csv(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError> {
             err(x.final_rms_error),
             err(x.energy_drift),
             err(x.sag_error),
+            if x.collides {
+                num(x.deepest_penetration)
+            } else {
+                "n/a".into()
+            },
+            if x.collides {
+                x.self_intersections.to_string()
+            } else {
+                "n/a".into()
+            },
+            num(x.collision_share),
             if x.diverged { "yes" } else { "no" }.to_string(),
             x.diverged_at.map_or("n/a".into(), num),
             format!("\"{}\"", x.message.replace('"', "'")),
@@ -74,6 +92,15 @@ pub fn write_csv(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError> {
         s.push('\n');
     }
     write(out.join("runs.csv"), &s)
+}
+
+/// Detection mode as written in scene files, "scene" for the scene's own, "n/a" without collisions.
+fn collision_mode(x: &RunRecord) -> String {
+    match x.settings.collision {
+        _ if !x.collides => "n/a".into(),
+        Some((m, _)) => format!("{m:?}").to_lowercase(),
+        None => "scene".into(),
+    }
 }
 
 fn dt_str(dt: f64) -> String {
@@ -337,6 +364,107 @@ pub fn write_summary(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError>
                     }
                 }
             }
+        }
+    }
+
+    // Collision modes.
+    let coll: Vec<&RunRecord> = runs
+        .iter()
+        .filter(|x| x.groups.contains(&"collision"))
+        .collect();
+    if !coll.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Collision detection mode and self-collision ({n0}-vertex side)\n"
+        );
+        let _ = writeln!(s, "| scene | mode | self-collision | integrator | dt | wall s per sim s | collision share of step | RMS error (m) | deepest penetration (m) | self-intersecting pairs |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+        for x in &coll {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {:.3} | {:.0}% | {} | {:.2e} | {} |",
+                x.settings.scene.name(),
+                collision_mode(x),
+                x.settings.collision.is_some_and(|c| c.1),
+                x.settings.integrator.name(),
+                dt_str(x.settings.dt()),
+                x.cost(),
+                100.0 * x.collision_share,
+                err_str(x, x.rms_error),
+                x.deepest_penetration,
+                x.self_intersections
+            );
+        }
+        let ratio = |a: DetectionMode, b: DetectionMode, self_c: bool| {
+            median(
+                coll.iter()
+                    .filter(|x| !x.diverged && x.settings.collision == Some((a, self_c)))
+                    .filter_map(|x| {
+                        coll.iter()
+                            .find(|y| {
+                                !y.diverged
+                                    && y.settings.scene == x.settings.scene
+                                    && y.settings.integrator == x.settings.integrator
+                                    && y.settings.dt_level == x.settings.dt_level
+                                    && y.settings.collision == Some((b, self_c))
+                            })
+                            .map(|y| x.cost() / y.cost())
+                    })
+                    .collect(),
+            )
+        };
+        let _ = writeln!(s);
+        for self_c in [false, true] {
+            if let Some(q) = ratio(DetectionMode::Continuous, DetectionMode::Proximity, self_c) {
+                let _ = writeln!(s, "- Self-collision {}: `continuous` costs {q:.2}x `proximity` per simulated second (median over matching integrator and step).", if self_c { "on" } else { "off" });
+            }
+            if let Some(q) = ratio(DetectionMode::Proximity, DetectionMode::Spheres, self_c) {
+                let _ = writeln!(
+                    s,
+                    "- Self-collision {}: `proximity` costs {q:.2}x `spheres`.",
+                    if self_c { "on" } else { "off" }
+                );
+            }
+        }
+        for m in [
+            DetectionMode::Spheres,
+            DetectionMode::Proximity,
+            DetectionMode::Continuous,
+        ] {
+            if let Some(q) = median(
+                coll.iter()
+                    .filter(|x| !x.diverged && x.settings.collision == Some((m, false)))
+                    .filter_map(|x| {
+                        coll.iter()
+                            .find(|y| {
+                                !y.diverged
+                                    && y.settings.scene == x.settings.scene
+                                    && y.settings.integrator == x.settings.integrator
+                                    && y.settings.dt_level == x.settings.dt_level
+                                    && y.settings.collision == Some((m, true))
+                            })
+                            .map(|y| y.cost() / x.cost())
+                    })
+                    .collect(),
+            ) {
+                let _ = writeln!(
+                    s,
+                    "- Turning self-collision on with `{}` costs {q:.2}x.",
+                    format!("{m:?}").to_lowercase()
+                );
+            }
+        }
+        let worst = |self_c: Option<bool>| {
+            coll.iter()
+                .filter(|x| {
+                    !x.diverged
+                        && self_c.is_none_or(|c| x.settings.collision.is_some_and(|k| k.1 == c))
+                })
+                .map(|x| x.self_intersections)
+                .max()
+        };
+        if let (Some(off), Some(on)) = (worst(Some(false)), worst(Some(true))) {
+            let _ = writeln!(s, "- Most self-intersecting triangle pairs at a sample time: {off} with self-collision off, {on} with it on.");
         }
     }
 

@@ -49,20 +49,50 @@ cloths:
     pins: [ { region: left_edge } ]
 "#;
 
+/// A sheet dropped onto a sphere: contact, friction and (optionally) self-collision where the
+/// corners fold. Continuous detection without self-collision unless a run says otherwise
+/// (the reference too: self-collision is a knob of the collision sweep, compared against it).
+const SPHERE_DRAPE: &str = r#"
+name: sphere_drape
+effects: [gravity, stretch, shear, bending, damping]
+solver: { integrator: rk4, dt: 0.001 }
+cloths:
+  - name: sheet
+    grid: { size: [1.2, 1.2], resolution: [16, 16], pose: { xyz: [0.0, 0.0, 0.62] } }
+    material:
+      density: 0.2
+      stretch: 1500.0
+      shear: 150.0
+      bend_warp: 1.0e-4
+      bend_weft: 1.0e-4
+      damping: { spring: 0.05, air: 0.1 }
+      thickness: 0.01
+      friction: 0.4
+obstacles:
+  - { name: ball, shape: { type: sphere, radius: 0.4 }, pose: { xyz: [0.0, 0.0, 0.2] } }
+collision: { mode: continuous, self_collision: false }
+"#;
+
 /// One of the study's scenes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum StudyScene {
     HangingSwing,
     Flag,
+    SphereDrape,
 }
 
 impl StudyScene {
-    pub const ALL: [StudyScene; 2] = [StudyScene::HangingSwing, StudyScene::Flag];
+    pub const ALL: [StudyScene; 3] = [
+        StudyScene::HangingSwing,
+        StudyScene::Flag,
+        StudyScene::SphereDrape,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             StudyScene::HangingSwing => "hanging_swing",
             StudyScene::Flag => "flag",
+            StudyScene::SphereDrape => "sphere_drape",
         }
     }
 
@@ -70,6 +100,7 @@ impl StudyScene {
         match self {
             StudyScene::HangingSwing => HANGING_SWING,
             StudyScene::Flag => FLAG,
+            StudyScene::SphereDrape => SPHERE_DRAPE,
         }
     }
 
@@ -77,7 +108,7 @@ impl StudyScene {
     /// keeps its 3:2 aspect.
     pub fn resolution(self, n: usize) -> [usize; 2] {
         match self {
-            StudyScene::HangingSwing => [n, n],
+            StudyScene::HangingSwing | StudyScene::SphereDrape => [n, n],
             StudyScene::Flag => [n, ((n as f64) * 2.0 / 3.0).round().max(2.0) as usize],
         }
     }
@@ -98,6 +129,7 @@ impl StudyScene {
         match self {
             StudyScene::HangingSwing => 1.0,
             StudyScene::Flag => 0.9,
+            StudyScene::SphereDrape => 1.2,
         }
     }
 }
