@@ -92,6 +92,7 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn study(quick: bool, out: PathBuf) -> Result<()> {
+    use anyhow::Context as _;
     use drape::study::{run_study, Plan};
     let plan = if quick { Plan::quick() } else { Plan::full() };
     let start = std::time::Instant::now();

@@ -169,7 +169,9 @@ pub fn write_summary(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError>
             f.integrator.name(),
             f.order,
             theoretical_order(f.integrator),
-            if (f.order - theoretical_order(f.integrator)).abs() <= 0.2 * theoretical_order(f.integrator) {
+            if (f.order - theoretical_order(f.integrator)).abs()
+                <= 0.2 * theoretical_order(f.integrator)
+            {
                 "yes"
             } else {
                 "no"
@@ -333,7 +335,12 @@ pub fn write_summary(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError>
     for &scene in &r.plan.scenes {
         for &n in &r.plan.resolutions {
             for k in IntegratorKind::ALL {
-                let tried = runs.iter().any(|x| x.settings.scene == scene && x.settings.n == n && x.settings.integrator == k && x.groups.contains(&"resolution"));
+                let tried = runs.iter().any(|x| {
+                    x.settings.scene == scene
+                        && x.settings.n == n
+                        && x.settings.integrator == k
+                        && x.groups.contains(&"resolution")
+                });
                 if !tried {
                     continue;
                 }
