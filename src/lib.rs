@@ -20,6 +20,7 @@ pub mod robot;
 pub mod ros;
 pub mod scene;
 pub mod sim;
+pub mod study;
 
 /// All simulation state is double precision: convergence-order and energy tests
 /// need the headroom, and the cost over f32 is small for scalar spring loops.

@@ -41,6 +41,15 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Measure what accuracy costs in time: sweep integrators, steps, CG settings and resolutions.
+    Study {
+        /// Small sweep (under 2 minutes) instead of the full study.
+        #[arg(long)]
+        quick: bool,
+        /// Output folder (runs.csv, summary.md, plots, cached references).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Parse and validate a scene, and print what it builds.
     Check {
         #[arg(long)]
@@ -68,6 +77,7 @@ fn run(cli: Cli) -> Result<()> {
             joints,
             quiet,
         } => record(scene, out, duration, distro, frame_id, joints, quiet),
+        Command::Study { quick, out } => study(quick, out),
         Command::Check { scene } => {
             let s = drape::scene::Scene::load(&scene)?;
             let sim = s.build()?;
@@ -84,6 +94,26 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn study(quick: bool, out: PathBuf) -> Result<()> {
+    use anyhow::Context as _;
+    use drape::study::{run_study, Plan};
+    let plan = if quick { Plan::quick() } else { Plan::full() };
+    let start = std::time::Instant::now();
+    let r = run_study(&plan, &out, |line| log::info!("{line}"))
+        .with_context(|| format!("study into {}", out.display()))?;
+    println!(
+        "{} runs in {:.0} s; wrote {}",
+        r.runs.len(),
+        start.elapsed().as_secs_f64(),
+        r.files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
 }
 
 #[cfg(feature = "ros")]

@@ -1,0 +1,169 @@
+//! Reference solutions: each scene and resolution run once with RK4 at a step much smaller than
+//! any in the sweep, cached in the output folder so later studies reuse it.
+//!
+//! Cache file: one text header line naming everything the solution depends on, then little-endian
+//! f64s: for each sample its energy and the positions. A header that does not match is recomputed.
+
+use super::run::{run, Horizon, RunSettings, Trajectory};
+use super::scenes::StudyScene;
+use super::StudyError;
+use crate::integrate::IntegratorKind;
+use crate::Vec3;
+use std::path::{Path, PathBuf};
+
+/// Bumped whenever the scenes or the reference method change, to invalidate old caches.
+const FORMAT: &str = "drape-study-reference v1";
+
+/// How many finer levels are tried when RK4 is unstable at the requested step.
+const RETRIES: u32 = 3;
+
+#[derive(Debug, Clone)]
+pub struct Reference {
+    pub trajectory: Trajectory,
+    /// `dt = 1 / (60 * 2^dt_level)` actually used.
+    pub dt_level: u32,
+    pub vertices: usize,
+    /// True if read from the cache.
+    pub cached: bool,
+}
+
+fn header(scene: StudyScene, n: usize, stiffness: f64, horizon: &Horizon, level: u32) -> String {
+    format!(
+        "{FORMAT} scene={} res={:?} stiffness={stiffness:e} samples={:?} integrator=rk4 min_dt_level={level}",
+        scene.name(),
+        scene.resolution(n),
+        horizon.sample_frames
+    )
+}
+
+/// Cache file of a scene at resolution `n`.
+pub fn cache_path(dir: &Path, scene: StudyScene, n: usize, stiffness: f64) -> PathBuf {
+    let [a, b] = scene.resolution(n);
+    dir.join("reference")
+        .join(format!("{}_{a}x{b}_k{stiffness:e}.ref", scene.name()))
+}
+
+/// The reference of `scene` at resolution `n`: RK4 at `dt_level` (or finer if that is unstable).
+pub fn reference(
+    dir: &Path,
+    scene: StudyScene,
+    n: usize,
+    stiffness: f64,
+    horizon: &Horizon,
+    dt_level: u32,
+) -> Result<Reference, StudyError> {
+    let path = cache_path(dir, scene, n, stiffness);
+    let head = header(scene, n, stiffness, horizon, dt_level);
+    if let Some(r) = read(&path, &head, horizon.sample_frames.len())? {
+        return Ok(r);
+    }
+    for level in dt_level..=dt_level + RETRIES {
+        let settings = RunSettings {
+            scene,
+            n,
+            stiffness,
+            integrator: IntegratorKind::Rk4,
+            dt_level: level,
+            cg_tolerance: 1e-10,
+            cg_max_iterations: 1000,
+            collision: None,
+        };
+        let out = run(&settings, horizon)?;
+        if out.diverged.is_some() {
+            log::warn!(
+                "reference {} n={n}: RK4 unstable at level {level}, halving the step",
+                scene.name()
+            );
+            continue;
+        }
+        let r = Reference {
+            trajectory: out.trajectory,
+            dt_level: level,
+            vertices: out.vertices,
+            cached: false,
+        };
+        write(&path, &head, &r)?;
+        return Ok(r);
+    }
+    Err(StudyError::Reference {
+        scene: scene.name().to_string(),
+        n,
+        reason: format!("RK4 diverged down to dt level {}", dt_level + RETRIES),
+    })
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StudyError + '_ {
+    move |source| StudyError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn write(path: &Path, head: &str, r: &Reference) -> Result<(), StudyError> {
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).map_err(io_err(parent))?;
+    }
+    let mut bytes = format!("{head} level={} vertices={}\n", r.dt_level, r.vertices).into_bytes();
+    for (e, xs) in r.trajectory.energy.iter().zip(&r.trajectory.positions) {
+        bytes.extend(e.to_le_bytes());
+        for x in xs {
+            for c in x.to_array() {
+                bytes.extend(c.to_le_bytes());
+            }
+        }
+    }
+    std::fs::write(path, bytes).map_err(io_err(path))
+}
+
+/// Reads a cached reference; `None` if absent, stale or malformed (it is then recomputed).
+fn read(path: &Path, head: &str, samples: usize) -> Result<Option<Reference>, StudyError> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(io_err(path)(e)),
+    };
+    let Some(nl) = bytes.iter().position(|&b| b == b'\n') else {
+        return Ok(None);
+    };
+    let line = String::from_utf8_lossy(&bytes[..nl]);
+    let Some(rest) = line.strip_prefix(head) else {
+        log::info!("{}: stale reference, recomputing", path.display());
+        return Ok(None);
+    };
+    let field = |key: &str| -> Option<usize> {
+        rest.split_whitespace()
+            .find_map(|kv| kv.strip_prefix(key))
+            .and_then(|v| v.parse().ok())
+    };
+    let (Some(level), Some(vertices)) = (field("level="), field("vertices=")) else {
+        return Ok(None);
+    };
+    let body = &bytes[nl + 1..];
+    if body.len() != samples * (1 + 3 * vertices) * 8 {
+        log::warn!("{}: truncated reference, recomputing", path.display());
+        return Ok(None);
+    }
+    let mut vals = body
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+    let mut t = Trajectory::default();
+    for _ in 0..samples {
+        t.energy.push(vals.next().unwrap_or(f64::NAN));
+        let xs: Vec<Vec3> = (0..vertices)
+            .map(|_| {
+                let mut c = [0.0; 3];
+                for v in &mut c {
+                    *v = vals.next().unwrap_or(f64::NAN);
+                }
+                Vec3::from_array(c)
+            })
+            .collect();
+        t.positions.push(xs);
+    }
+    Ok(Some(Reference {
+        trajectory: t,
+        dt_level: level as u32,
+        vertices,
+        cached: true,
+    }))
+}
