@@ -76,7 +76,6 @@ pub(crate) struct SelfCollider {
     pairs: Vec<(u32, u32)>,
     pairs_ee: Vec<(u32, u32)>,
     w: Vec<f64>,
-    pair_gap: Vec<f64>,
     parent: Vec<u32>,
     zone_members: Vec<Vec<u32>>,
     in_zone: Vec<bool>,
@@ -140,7 +139,6 @@ impl SelfCollider {
             pairs: Vec::new(),
             pairs_ee: Vec::new(),
             w: Vec::new(),
-            pair_gap: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),
             in_zone: Vec::new(),
@@ -157,13 +155,19 @@ impl SelfCollider {
 
     /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
     /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
-    fn broad_phase(&mut self, xa: &[Vec3], xb: &[Vec3], margin: &[f64], vertex_vertex: bool) {
+    fn broad_phase(
+        &mut self,
+        xa: &[Vec3],
+        xb: &[Vec3],
+        margin: impl Fn(usize) -> f64,
+        vertex_vertex: bool,
+    ) {
         // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
         // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
         self.qboxes.clear();
         self.qboxes
-            .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin[i])));
+            .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
         if vertex_vertex {
             self.iboxes.clear();
             self.iboxes
@@ -215,7 +219,7 @@ impl SelfCollider {
         self.qboxes.clear();
         self.qboxes
             .extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
-                let m = margin[e[0] as usize].max(margin[e[1] as usize]);
+                let m = margin(e[0] as usize).max(margin(e[1] as usize));
                 Aabb {
                     lo: bx.lo - Vec3::splat(m),
                     hi: bx.hi + Vec3::splat(m),
@@ -339,11 +343,7 @@ impl SelfCollider {
     ) -> usize {
         // Query boxes: end positions inflated by twice the radius (pair distance).
         let max_th = th.iter().copied().fold(0.0, f64::max);
-        self.pair_gap.clear();
-        self.pair_gap.extend(th.iter().map(|t| t + max_th));
-        let margin = std::mem::take(&mut self.pair_gap);
-        self.broad_phase(x1, x1, &margin, vertex_vertex);
-        self.pair_gap = margin;
+        self.broad_phase(x1, x1, |i| th[i] + max_th, vertex_vertex);
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Find close pairs in parallel, then answer them in order (Gauss-Seidel), re-measuring
@@ -474,12 +474,7 @@ impl SelfCollider {
         h: f64,
         correct: bool,
     ) -> usize {
-        self.pair_gap.clear();
-        self.pair_gap
-            .extend(th.iter().map(|t| t * CCD_ETA_FRACTION * 2.0));
-        let margin = std::mem::take(&mut self.pair_gap);
-        self.broad_phase(x0, x1, &margin, false);
-        self.pair_gap = margin;
+        self.broad_phase(x0, x1, |i| th[i] * CCD_ETA_FRACTION * 2.0, false);
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Detect in parallel on the current positions, then answer the hits in order

@@ -93,6 +93,27 @@ fn scale_and_overlap(a: &[Vec3], b: &[Vec3], eta: f64) -> Scale {
     }
 }
 
+/// [`scale_and_overlap`] of a point path and a moving triangle; `None` when their boxes are
+/// farther apart than `eta`.
+fn vt_scale(p0: Vec3, p1: Vec3, tri0: [Vec3; 3], tri1: [Vec3; 3], eta: f64) -> Option<Scale> {
+    let s = scale_and_overlap(
+        &[p0, p1],
+        &[tri0[0], tri0[1], tri0[2], tri1[0], tri1[1], tri1[2]],
+        eta,
+    );
+    s.overlap.then_some(s)
+}
+
+/// [`scale_and_overlap`] of two moving edges; `None` when their boxes are farther apart than `eta`.
+fn ee_scale(p0: [Vec3; 2], p1: [Vec3; 2], q0: [Vec3; 2], q1: [Vec3; 2], eta: f64) -> Option<Scale> {
+    let s = scale_and_overlap(
+        &[p0[0], p0[1], p1[0], p1[1]],
+        &[q0[0], q0[1], q1[0], q1[1]],
+        eta,
+    );
+    s.overlap.then_some(s)
+}
+
 /// Coefficients of `(A(t) x B(t)) . C(t)` for `X(t) = X0 + t Xv`.
 #[inline]
 fn triple_cubic(a0: Vec3, av: Vec3, b0: Vec3, bv: Vec3, c0: Vec3, cv: Vec3) -> Cubic {
@@ -193,14 +214,7 @@ pub fn vertex_triangle_ccd(
     tri1: [Vec3; 3],
     eta: f64,
 ) -> Option<VtHit> {
-    let s = scale_and_overlap(
-        &[p0, p1],
-        &[tri0[0], tri0[1], tri0[2], tri1[0], tri1[1], tri1[2]],
-        eta,
-    );
-    if !s.overlap {
-        return None;
-    }
+    let s = vt_scale(p0, p1, tri0, tri1, eta)?;
     let (a0, a1) = (tri0[0], tri1[0]);
     let (e0, e1) = (tri0[1] - a0, tri1[1] - a1);
     let (f0, f1) = (tri0[2] - a0, tri1[2] - a1);
@@ -232,14 +246,7 @@ pub fn vertex_triangle_ccd_thick(
     tri1: [Vec3; 3],
     eta: f64,
 ) -> Option<VtHit> {
-    let s = scale_and_overlap(
-        &[p0, p1],
-        &[tri0[0], tri0[1], tri0[2], tri1[0], tri1[1], tri1[2]],
-        eta,
-    );
-    if !s.overlap {
-        return None;
-    }
+    let s = vt_scale(p0, p1, tri0, tri1, eta)?;
     let vp = p1 - p0;
     let lip = (0..3)
         .map(|i| (vp - (tri1[i] - tri0[i])).length())
@@ -267,14 +274,7 @@ pub fn edge_edge_ccd(
     q1: [Vec3; 2],
     eta: f64,
 ) -> Option<EeHit> {
-    let s = scale_and_overlap(
-        &[p0[0], p0[1], p1[0], p1[1]],
-        &[q0[0], q0[1], q1[0], q1[1]],
-        eta,
-    );
-    if !s.overlap {
-        return None;
-    }
+    let s = ee_scale(p0, p1, q0, q1, eta)?;
     let (e0, e1) = (p0[1] - p0[0], p1[1] - p1[0]);
     let (f0, f1) = (q0[1] - q0[0], q1[1] - q1[0]);
     let (g0, g1) = (q0[0] - p0[0], q1[0] - p1[0]);
@@ -305,14 +305,7 @@ pub fn edge_edge_ccd_thick(
     q1: [Vec3; 2],
     eta: f64,
 ) -> Option<EeHit> {
-    let s = scale_and_overlap(
-        &[p0[0], p0[1], p1[0], p1[1]],
-        &[q0[0], q0[1], q1[0], q1[1]],
-        eta,
-    );
-    if !s.overlap {
-        return None;
-    }
+    let s = ee_scale(p0, p1, q0, q1, eta)?;
     let vp = [p1[0] - p0[0], p1[1] - p0[1]];
     let vq = [q1[0] - q0[0], q1[1] - q0[1]];
     let lip = vp
