@@ -68,7 +68,9 @@ enum Command {
 }
 
 fn main() {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info")).init();
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(
+        "info,rustdds=warn,rustdds::network::udp_sender=error,ros2_client=warn",
+    )).init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("drape: error: {e:#}");
         std::process::exit(1);

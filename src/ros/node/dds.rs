@@ -359,10 +359,16 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
     if sim_thread.join().is_err() {
         log::error!("the simulation thread panicked");
     }
+    // RustDDS logs errors about sockets and entities it tears down in its own order; they
+    // say nothing about the run, so the teardown is quiet.
+    let level = log::max_level();
+    log::set_max_level(log::LevelFilter::Off);
     drop(ep);
+    drop(logger);
     drop(node);
-    drop(ctx);
     let _ = spin_thread.join();
+    drop(ctx);
+    log::set_max_level(level);
     result
 }
 

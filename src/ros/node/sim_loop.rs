@@ -279,13 +279,16 @@ impl SimLoop {
         true
     }
 
-    /// Runs the steps due at clock time `now` and emits the outputs due.
-    pub fn tick(&mut self, now: f64, out: &mut Vec<Output>) {
+    /// Runs one step if one is due at clock time `now` and emits the outputs due. Returns true
+    /// while more steps are owed: call again with a fresh `now` (one step per call keeps
+    /// publishing on schedule when the solver is slower than real time).
+    pub fn tick(&mut self, now: f64, out: &mut Vec<Output>) -> bool {
+        let mut owed = 0;
         if self.paused {
             self.pacer.hold(now, self.sim.time());
         } else {
-            let n = self.pacer.due_steps(now, self.sim.time());
-            for _ in 0..n {
+            owed = self.pacer.due_steps(now, self.sim.time());
+            if owed > 0 {
                 self.step_once(now, out);
             }
         }
@@ -308,6 +311,13 @@ impl SimLoop {
             out.push(Output::Diagnostics(self.diagnostics_message(now)));
             self.start_window(now);
         }
+        owed > 1
+    }
+
+    /// Ticks until no step is owed at `now` (a fixed clock instant, as in tests or with
+    /// `/clock`).
+    pub fn advance_to(&mut self, now: f64, out: &mut Vec<Output>) {
+        while self.tick(now, out) {}
     }
 
     fn step_once(&mut self, now: f64, out: &mut Vec<Output>) {
@@ -613,8 +623,10 @@ pub fn run(
     if let Some(n) = now {
         core.sync_clock(n);
     }
+    let mut behind = false;
     while !stop.load(Ordering::Relaxed) {
         let wait = match (mode, now) {
+            _ if behind => 0.0,
             (ClockMode::Wall, _) => (core.next_wake() - wall.now()).clamp(0.0, 0.05),
             _ => 0.05,
         };
@@ -640,9 +652,10 @@ pub fn run(
                 return;
             }
         }
-        if let Some(t) = now {
-            core.tick(t, &mut out);
-        }
+        behind = match now {
+            Some(t) => core.tick(t, &mut out),
+            None => false,
+        };
         for o in out.drain(..) {
             if tx.send(o).is_err() {
                 return;
