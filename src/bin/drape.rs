@@ -68,9 +68,12 @@ enum Command {
 }
 
 fn main() {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(
-        "info,rustdds=warn,rustdds::network::udp_sender=error,ros2_client=warn",
-    )).init();
+    // RustDDS warns about every datagram over 1500 bytes (each mesh); that is normal here.
+    env_logger::Builder::from_env(
+        env_logger::Env::default().default_filter_or("info,rustdds=warn,ros2_client=warn"),
+    )
+    .filter_module("rustdds::network::udp_sender", log::LevelFilter::Error)
+    .init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("drape: error: {e:#}");
         std::process::exit(1);
