@@ -90,7 +90,12 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     let points = peer
         .create_subscription::<PointCloud2>(&t, Some(reliable.clone()))
         .unwrap();
-    let t = topic(&mut peer, "/diagnostics", "diagnostic_msgs", "DiagnosticArray");
+    let t = topic(
+        &mut peer,
+        "/diagnostics",
+        "diagnostic_msgs",
+        "DiagnosticArray",
+    );
     let diags = peer
         .create_subscription::<DiagnosticArray>(&t, Some(reliable.clone()))
         .unwrap();
@@ -128,8 +133,12 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     while start.elapsed() < Duration::from_secs(6) {
         k += 1;
         sim_t += 0.01;
-        clock.publish(Clock { clock: Time::from_nanos((sim_t * 1e9) as u64) }).unwrap();
-        if k % 2 == 0 {
+        clock
+            .publish(Clock {
+                clock: Time::from_nanos((sim_t * 1e9) as u64),
+            })
+            .unwrap();
+        if k.is_multiple_of(2) {
             let s = -1.5 + 0.3 * (sim_t - CLOCK0).sin();
             joints.publish(js(&arm, &[s, -0.2], sim_t)).unwrap();
         }
@@ -161,14 +170,26 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     let result = node.join().expect("node thread");
     let shutdown = stop_at.elapsed();
     let summary = result.expect("node ran");
-    eprintln!("node: {summary:?}, shut down in {shutdown:?}, {} point clouds", stamps.len());
+    eprintln!(
+        "node: {summary:?}, shut down in {shutdown:?}, {} point clouds",
+        stamps.len()
+    );
 
     // Stamps follow /clock: simulated seconds from 50 s, never wall-clock time, increasing.
     assert!(stamps.len() > 40, "only {} point clouds", stamps.len());
-    assert!(stamps.iter().all(|&s| s >= CLOCK0 && s <= sim_t + 1e-6), "{stamps:?}");
-    assert!(stamps.windows(2).all(|w| w[1] >= w[0]), "stamps go back: {stamps:?}");
+    assert!(
+        stamps.iter().all(|&s| s >= CLOCK0 && s <= sim_t + 1e-6),
+        "{stamps:?}"
+    );
+    assert!(
+        stamps.windows(2).all(|w| w[1] >= w[0]),
+        "stamps go back: {stamps:?}"
+    );
     let bad_at = bad_sent_at.expect("bad inputs sent");
-    assert!(stamps.len() > bad_at + 20, "publishing stopped after bad inputs");
+    assert!(
+        stamps.len() > bad_at + 20,
+        "publishing stopped after bad inputs"
+    );
     let d = last_diag.expect("diagnostics arrived");
     assert_eq!(value(&d, "robot_descriptions_loaded"), 1, "{d:?}");
     assert_eq!(value(&d, "robot_description_failures"), 0);
@@ -179,5 +200,8 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     let r = reset_answer.expect("~/reset answered");
     assert!(r.success, "{r:?}");
     assert!(value(&d, "resets") >= 1);
-    assert!(shutdown < Duration::from_secs(5), "shutdown took {shutdown:?}");
+    assert!(
+        shutdown < Duration::from_secs(5),
+        "shutdown took {shutdown:?}"
+    );
 }

@@ -78,7 +78,10 @@ fn cyclone_python_peer_drives_the_node() {
     let log = log.join().unwrap_or_default();
     eprintln!("node stderr:\n{log}\nnode exited {status} {shutdown:?} after SIGTERM");
     let py = py.expect("run python3 tests/py/node_interop.py");
-    assert!(py.success(), "the Cyclone DDS peer reported failures ({py})");
+    assert!(
+        py.success(),
+        "the Cyclone DDS peer reported failures ({py})"
+    );
     assert!(status.success(), "node exit status {status}");
     assert!(
         shutdown < Duration::from_secs(3),

@@ -93,7 +93,10 @@ fn publishes_at_fixed_rate_on_synthetic_clock() {
     let d = diagnostics(&out);
     assert_eq!(d.len(), 2, "1 Hz diagnostics over 2 s");
     let rtf: f64 = value(d[1], "real_time_factor").parse().unwrap();
-    assert!((rtf - 1.0).abs() < 0.05, "real-time factor {rtf} on a synthetic clock");
+    assert!(
+        (rtf - 1.0).abs() < 0.05,
+        "real-time factor {rtf} on a synthetic clock"
+    );
     assert_eq!(l.frame_id(), "base_link");
 }
 
@@ -127,11 +130,17 @@ fn joint_states_move_attached_vertices_with_their_link() {
                 .expect("attachment frame bound to a link");
             let want = d.link_poses()[link].transform_point(*local);
             let got = sim.cloth.x[*v as usize];
-            assert!((got - want).length() < 1e-9, "vertex {v} left its link: {got} vs {want}");
+            assert!(
+                (got - want).length() < 1e-9,
+                "vertex {v} left its link: {got} vs {want}"
+            );
             attached += 1;
         }
     }
-    assert!(attached > 0, "the towel scene attaches vertices to the palm");
+    assert!(
+        attached > 0,
+        "the towel scene attaches vertices to the palm"
+    );
     // The held corner moved with the arm.
     let moved = sim
         .cloth
@@ -171,7 +180,12 @@ fn bad_joint_states_are_dropped_and_counted_while_publishing_continues() {
     }
     run(&mut l, T0, T0 + 1.0, 0.01, &mut out);
     // The robot kept the last good command.
-    let j = l.driver().unwrap().robot().joint_index("right_elbow").unwrap();
+    let j = l
+        .driver()
+        .unwrap()
+        .robot()
+        .joint_index("right_elbow")
+        .unwrap();
     assert_eq!(
         l.driver().unwrap().joint_positions().positions[j],
         -0.3,
@@ -214,7 +228,10 @@ fn backlog_is_bounded_and_reported() {
     l.advance_to(T0 + 3.0, &mut out);
     assert_eq!(l.stats().steps, 4);
     assert_eq!(l.dropped_steps(), (3.0 / dt).round() as u64 - 4);
-    assert!((l.clock_of_state() - (T0 + 3.0)).abs() < dt, "stamps stay with the clock");
+    assert!(
+        (l.clock_of_state() - (T0 + 3.0)).abs() < dt,
+        "stamps stay with the clock"
+    );
     let d = diagnostics(&out);
     assert_eq!(d.len(), 1);
     let rtf: f64 = value(d[0], "real_time_factor").parse().unwrap();
@@ -244,7 +261,13 @@ fn reset_restores_the_initial_cloth_and_pause_holds_time() {
     out.clear();
     l.handle(Command::Reset { id: 7 }, T0 + 1.5, &mut out);
     assert!(
-        matches!(&out[..], [Output::ResetDone { id: 7, result: Ok(_) }]),
+        matches!(
+            &out[..],
+            [Output::ResetDone {
+                id: 7,
+                result: Ok(_)
+            }]
+        ),
         "{out:?}"
     );
     assert_eq!(l.simulation().cloth.x, x0);
@@ -258,7 +281,11 @@ fn robot_description_reloads_and_bad_one_keeps_the_robot() {
     let mut out = Vec::new();
     l.sync_clock(T0);
     let name0 = l.driver().unwrap().robot().name.clone();
-    l.handle(Command::RobotDescription("<robot name=\"x\"".into()), T0, &mut out);
+    l.handle(
+        Command::RobotDescription("<robot name=\"x\"".into()),
+        T0,
+        &mut out,
+    );
     assert_eq!(l.stats().description_failures, 1);
     assert_eq!(l.driver().unwrap().robot().name, name0);
     // A URDF without the link the towel hangs from cannot be used either.

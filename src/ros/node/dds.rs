@@ -17,9 +17,9 @@ use ros2_client::dds::rustdds;
 use ros2_client::log::LogLevel;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{
-    Context, MessageTypeName, Name, Node, NodeLoggingHandle, NodeName, NodeOptions,
-    ParameterValue, Publisher, QosProfile, RmwRequestId, RosoutRaw, Server, ServiceMapping,
-    ServiceTypeName, Subscription,
+    Context, MessageTypeName, Name, Node, NodeLoggingHandle, NodeName, NodeOptions, ParameterValue,
+    Publisher, QosProfile, RmwRequestId, RosoutRaw, Server, ServiceMapping, ServiceTypeName,
+    Subscription,
 };
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -56,7 +56,9 @@ pub fn context(net: Network) -> Result<Context, NodeError> {
     if net.localhost_only {
         b = b.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
     }
-    let dp = b.build().map_err(|e| NodeError::Dds(format!("participant: {e:?}")))?;
+    let dp = b
+        .build()
+        .map_err(|e| NodeError::Dds(format!("participant: {e:?}")))?;
     Context::from_domain_participant(dp).map_err(|e| NodeError::Dds(format!("context: {e:?}")))
 }
 
@@ -119,13 +121,25 @@ fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError> {
         node.create_topic(&topic(n)?, MessageTypeName::new(pkg, ty), q)
             .map_err(|e| dds(n, e))
     };
-    let js_t = mk_topic(node, &t.joint_states, "sensor_msgs", "JointState", &qos_sensor(10))?;
+    let js_t = mk_topic(
+        node,
+        &t.joint_states,
+        "sensor_msgs",
+        "JointState",
+        &qos_sensor(10),
+    )?;
     let joint_states = node
         .create_subscription(&js_t, Some(qos_sensor(10)))
         .map_err(|e| dds(&t.joint_states, e))?;
     let description = match p.robot_description {
         DescriptionSource::Topic => {
-            let tt = mk_topic(node, &t.robot_description, "std_msgs", "String", &qos_latched())?;
+            let tt = mk_topic(
+                node,
+                &t.robot_description,
+                "std_msgs",
+                "String",
+                &qos_latched(),
+            )?;
             Some(
                 node.create_subscription(&tt, Some(qos_latched()))
                     .map_err(|e| dds(&t.robot_description, e))?,
@@ -145,7 +159,13 @@ fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError> {
     let frames = qos_reliable(1);
     let mt = mk_topic(node, &t.mesh, "visualization_msgs", "Marker", &frames)?;
     let pt = mk_topic(node, &t.points, "sensor_msgs", "PointCloud2", &frames)?;
-    let ot = mk_topic(node, &t.obstacles, "visualization_msgs", "MarkerArray", &frames)?;
+    let ot = mk_topic(
+        node,
+        &t.obstacles,
+        "visualization_msgs",
+        "MarkerArray",
+        &frames,
+    )?;
     let dt = mk_topic(
         node,
         &t.diagnostics,
@@ -172,8 +192,12 @@ fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError> {
         joint_states,
         description,
         clock,
-        mesh: node.create_publisher(&mt, None).map_err(|e| dds("mesh", e))?,
-        points: node.create_publisher(&pt, None).map_err(|e| dds("points", e))?,
+        mesh: node
+            .create_publisher(&mt, None)
+            .map_err(|e| dds("mesh", e))?,
+        points: node
+            .create_publisher(&pt, None)
+            .map_err(|e| dds("points", e))?,
         obstacles: node
             .create_publisher(&ot, None)
             .map_err(|e| dds("obstacles", e))?,
@@ -214,7 +238,9 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
             ("paused", _) => Err("paused must be a boolean".into()),
             _ => match read_only.iter().find(|(k, _)| *k == name) {
                 Some((_, v)) if v == value => Ok(()),
-                Some(_) => Err(format!("{name} is read-only; restart the node to change it")),
+                Some(_) => Err(format!(
+                    "{name} is read-only; restart the node to change it"
+                )),
                 None => Err(format!("unknown parameter {name}")),
             },
         }
@@ -226,7 +252,8 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
             ("paused", ParameterValue::Boolean(b)) => Command::Pause(*b),
             _ => return Ok(()),
         };
-        cmd.send(c).map_err(|_| "the simulation has stopped".to_string())
+        cmd.send(c)
+            .map_err(|_| "the simulation has stopped".to_string())
     };
     o.parameter_validator(Box::new(validator))
         .parameter_set_action(Box::new(action))
@@ -274,12 +301,23 @@ impl Throttle {
     }
 
     fn warn(&mut self, text: impl FnOnce() -> String) {
-        if self.last.is_some_and(|t| t.elapsed() < Duration::from_secs(1)) {
+        if self
+            .last
+            .is_some_and(|t| t.elapsed() < Duration::from_secs(1))
+        {
             self.suppressed += 1;
             return;
         }
         let n = std::mem::take(&mut self.suppressed);
-        log::warn!("{}{}", text(), if n > 0 { format!(" ({n} more suppressed)") } else { String::new() });
+        log::warn!(
+            "{}{}",
+            text(),
+            if n > 0 {
+                format!(" ({n} more suppressed)")
+            } else {
+                String::new()
+            }
+        );
         self.last = Some(Instant::now());
     }
 }
@@ -313,15 +351,27 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         params.publish_rate,
         distro,
         net.domain_id,
-        if net.localhost_only { ", localhost only" } else { "" },
-        if params.use_sim_time { ", sim time from /clock" } else { "" },
+        if net.localhost_only {
+            ", localhost only"
+        } else {
+            ""
+        },
+        if params.use_sim_time {
+            ", sim time from /clock"
+        } else {
+            ""
+        },
     );
 
     let (cmd_tx, cmd_rx) = mpsc::channel::<Command>();
     let (out_tx, out_rx) = mpsc::channel::<Output>();
     let ctx = context(net)?;
-    let node_name = NodeName::new(&params.namespace, &params.name)
-        .map_err(|e| NodeError::Params(format!("node name `{}` in `{}`: {e:?}", params.name, params.namespace)))?;
+    let node_name = NodeName::new(&params.namespace, &params.name).map_err(|e| {
+        NodeError::Params(format!(
+            "node name `{}` in `{}`: {e:?}",
+            params.name, params.namespace
+        ))
+    })?;
     let mut node = ctx
         .new_node(node_name, node_options(params, cmd_tx.clone()))
         .map_err(|e| NodeError::Dds(format!("node: {e:?}")))?;
@@ -458,10 +508,16 @@ fn serve(
                 Output::Frame { mesh, points } => {
                     summary.frames_published += 1;
                     let a = ep.mesh.publish(*mesh).map_err(|e| format!("mesh: {e:?}"));
-                    let b = ep.points.publish(*points).map_err(|e| format!("points: {e:?}"));
+                    let b = ep
+                        .points
+                        .publish(*points)
+                        .map_err(|e| format!("points: {e:?}"));
                     a.and(b)
                 }
-                Output::Obstacles(m) => ep.obstacles.publish(m).map_err(|e| format!("obstacles: {e:?}")),
+                Output::Obstacles(m) => ep
+                    .obstacles
+                    .publish(m)
+                    .map_err(|e| format!("obstacles: {e:?}")),
                 Output::Diagnostics(d) => ep
                     .diagnostics
                     .publish(d)
@@ -498,7 +554,11 @@ mod tests {
     #[test]
     fn tilde_topics_resolve_under_the_node() {
         let n = NodeName::new("/", "drape").unwrap();
-        let dds = |t: &str, ns: &str| resolve_topic(t, ns, "drape").unwrap().to_dds_name("rt", &n, "");
+        let dds = |t: &str, ns: &str| {
+            resolve_topic(t, ns, "drape")
+                .unwrap()
+                .to_dds_name("rt", &n, "")
+        };
         assert_eq!(dds("~/mesh", "/"), "rt/drape/mesh");
         assert_eq!(dds("~/mesh", "/robot1"), "rt/robot1/drape/mesh");
         assert_eq!(dds("/joint_states", "/robot1"), "rt/joint_states");

@@ -14,8 +14,12 @@ pub mod sim_loop;
 pub use dds::{context, resolve_topic, run_node, NodeSummary};
 pub use network::Network;
 pub use pacer::{Pacer, Schedule};
-pub use params::{parse_ros_args, DescriptionSource, NodeParams, ParamsError, RosArgs, ServiceWire};
-pub use sim_loop::{ClockMode, Command, DroppedInputs, Level, LoopConfig, LoopStats, Output, SimLoop, WallClock};
+pub use params::{
+    parse_ros_args, DescriptionSource, NodeParams, ParamsError, RosArgs, ServiceWire,
+};
+pub use sim_loop::{
+    ClockMode, Command, DroppedInputs, Level, LoopConfig, LoopStats, Output, SimLoop, WallClock,
+};
 
 /// Why the node could not run.
 #[derive(Debug, thiserror::Error)]

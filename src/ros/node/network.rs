@@ -70,7 +70,9 @@ mod tests {
         assert_eq!(net(&[]), Ok(Network::default()));
         assert_eq!(net(&[("ROS_DOMAIN_ID", "42")]).unwrap().domain_id, 42);
         assert!(net(&[("ROS_DOMAIN_ID", "233")]).is_err());
-        assert!(net(&[("ROS_DOMAIN_ID", "x")]).unwrap_err().contains("ROS_DOMAIN_ID"));
+        assert!(net(&[("ROS_DOMAIN_ID", "x")])
+            .unwrap_err()
+            .contains("ROS_DOMAIN_ID"));
         assert!(net(&[("ROS_LOCALHOST_ONLY", "1")]).unwrap().localhost_only);
         assert!(!net(&[("ROS_LOCALHOST_ONLY", "0")]).unwrap().localhost_only);
         assert!(

@@ -69,7 +69,10 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             d.real_time_factor
                 .map_or_else(|| "n/a".into(), |r| format!("{r:.3}")),
         ),
-        kv("step_time_mean_ms", format!("{:.3}", d.step_time_mean * 1e3)),
+        kv(
+            "step_time_mean_ms",
+            format!("{:.3}", d.step_time_mean * 1e3),
+        ),
         kv("step_time_max_ms", format!("{:.3}", d.step_time_max * 1e3)),
         kv("sim_time_s", format!("{:.3}", d.sim_time)),
         kv("contacts", d.contacts.to_string()),
@@ -88,7 +91,10 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
         kv("dropped_wrong_length", s.dropped.wrong_length.to_string()),
         kv("dropped_unknown_joint", s.dropped.unknown_joint.to_string()),
         kv("dropped_out_of_order", s.dropped.out_of_order.to_string()),
-        kv("robot_descriptions_loaded", s.descriptions_loaded.to_string()),
+        kv(
+            "robot_descriptions_loaded",
+            s.descriptions_loaded.to_string(),
+        ),
         kv(
             "robot_description_failures",
             s.description_failures.to_string(),
@@ -126,11 +132,9 @@ pub fn obstacle_markers(
             let world = link_pose.mul(shape_pose);
             let (r#type, scale, points) = match g {
                 Geometry::Sphere { radius } => (Marker::SPHERE, [2.0 * radius; 3], Vec::new()),
-                Geometry::Box { half_extents } => (
-                    Marker::CUBE,
-                    (2.0 * *half_extents).to_array(),
-                    Vec::new(),
-                ),
+                Geometry::Box { half_extents } => {
+                    (Marker::CUBE, (2.0 * *half_extents).to_array(), Vec::new())
+                }
                 Geometry::Cylinder { radius, length } => (
                     Marker::CYLINDER,
                     [2.0 * radius, 2.0 * radius, *length],
@@ -228,7 +232,10 @@ mod tests {
         d.real_time_factor = Some(0.5);
         let s = &diagnostics(&d).status[0];
         assert_eq!(s.level, DiagnosticStatus::WARN);
-        assert!(s.values.iter().any(|kv| kv.key == "real_time_factor" && kv.value == "0.500"));
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "real_time_factor" && kv.value == "0.500"));
         d.new_divergences = 1;
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
     }

@@ -174,11 +174,7 @@ pub fn parse_ros_args<S: AsRef<str>>(args: &[S]) -> Result<RosArgs, ParamsError>
                 let (k, val) = split_assign(&v)?;
                 out.overrides.push((k.to_string(), val.to_string()));
             }
-            other => {
-                return Err(ParamsError::Args(format!(
-                    "unknown ROS argument `{other}`"
-                )))
-            }
+            other => return Err(ParamsError::Args(format!("unknown ROS argument `{other}`"))),
         }
     }
     Ok(out)
@@ -265,11 +261,12 @@ impl NodeParams {
                 reason,
             })?;
         }
-        self.validate().map_err(|(key, reason)| ParamsError::Invalid {
-            origin: "command line".into(),
-            key: key.into(),
-            reason,
-        })
+        self.validate()
+            .map_err(|(key, reason)| ParamsError::Invalid {
+                origin: "command line".into(),
+                key: key.into(),
+                reason,
+            })
     }
 
     fn set(&mut self, key: &str, v: &Value) -> Result<(), String> {
@@ -291,14 +288,17 @@ impl NodeParams {
                 self.distro = if s.is_empty() {
                     None
                 } else {
-                    Some(s.parse().map_err(|e: crate::ros::UnknownDistro| e.to_string())?)
+                    Some(
+                        s.parse()
+                            .map_err(|e: crate::ros::UnknownDistro| e.to_string())?,
+                    )
                 }
             }
             "use_sim_time" => self.use_sim_time = boolean(v)?,
             "paused" => self.paused = boolean(v)?,
             "max_backlog_steps" => {
                 let n = number(v)?;
-                if !(n >= 1.0 && n <= 1000.0 && n.fract() == 0.0) {
+                if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
                     return Err(format!("must be an integer in 1..=1000, got {n}"));
                 }
                 self.max_backlog_steps = n as u32;
@@ -457,7 +457,10 @@ drape:
         let bad = FILE.replace("publish_rate: 20", "publish_rate: -1");
         let e = NodeParams::from_yaml(&bad, "f.yaml", "drape").unwrap_err();
         let msg = e.to_string();
-        assert!(msg.contains("f.yaml") && msg.contains("publish_rate"), "{msg}");
+        assert!(
+            msg.contains("f.yaml") && msg.contains("publish_rate"),
+            "{msg}"
+        );
         let typo = FILE.replace("publish_rate", "publish_rat");
         let e = NodeParams::from_yaml(&typo, "f.yaml", "drape").unwrap_err();
         assert!(e.to_string().contains("publish_rat"), "{e}");

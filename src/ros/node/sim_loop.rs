@@ -6,9 +6,7 @@
 use super::outputs::{diagnostics, obstacle_markers, DiagnosticsInput};
 use super::pacer::{Pacer, Schedule};
 use crate::robot::{JointInput, JointInputError, JointPositions, JointSource, RobotDriver};
-use crate::ros::msg::{
-    ColorRGBA, DiagnosticArray, Marker, MarkerArray, PointCloud2, Time,
-};
+use crate::ros::msg::{ColorRGBA, DiagnosticArray, Marker, MarkerArray, PointCloud2, Time};
 use crate::ros::{mesh_marker, point_cloud, Distro};
 use crate::scene::{Scene, SceneError};
 use crate::sim::Simulation;
@@ -24,13 +22,18 @@ const RESET_BLEND_S: f64 = 0.5;
 #[derive(Debug, Clone)]
 pub enum Command {
     /// A joint state: its header stamp (0: unstamped) and content.
-    Joints { stamp_ns: i64, input: JointInput },
+    Joints {
+        stamp_ns: i64,
+        input: JointInput,
+    },
     /// A URDF (e.g. from `/robot_description`): rebuild the scene with this robot.
     RobotDescription(String),
     /// Simulated clock time (s) from `/clock`; ignored on the wall clock.
     Clock(f64),
     /// Restore the initial cloth; answered by [`Output::ResetDone`] with the same id.
-    Reset { id: u64 },
+    Reset {
+        id: u64,
+    },
     Pause(bool),
     PublishRate(f64),
     Stop,
@@ -228,7 +231,10 @@ impl SimLoop {
         if let Some(o) = &mut self.obstacles {
             *o = Schedule::new(self.cfg.obstacles_rate, now);
         }
-        self.diagnostics = Schedule::new(self.cfg.diagnostics_rate, now + 1.0 / self.cfg.diagnostics_rate);
+        self.diagnostics = Schedule::new(
+            self.cfg.diagnostics_rate,
+            now + 1.0 / self.cfg.diagnostics_rate,
+        );
         self.start_window(now);
     }
 
@@ -265,7 +271,11 @@ impl SimLoop {
                 if p != self.paused {
                     self.paused = p;
                     self.pacer.hold(now, self.sim.time());
-                    log(out, Level::Info, if p { "paused" } else { "resumed" }.to_string());
+                    log(
+                        out,
+                        Level::Info,
+                        if p { "paused" } else { "resumed" }.to_string(),
+                    );
                 }
             }
             Command::PublishRate(r) => {
@@ -486,7 +496,9 @@ impl SimLoop {
         scene.robot_urdf_text = Some(urdf);
         match scene.build_with_robot() {
             Ok((sim, driver)) => {
-                let name = driver.as_ref().map_or(String::new(), |d| d.robot().name.clone());
+                let name = driver
+                    .as_ref()
+                    .map_or(String::new(), |d| d.robot().name.clone());
                 self.scene = scene;
                 self.sim = sim;
                 self.commanded = None;
