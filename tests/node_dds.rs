@@ -14,8 +14,10 @@ use drape::ros::msg::{
 };
 use drape::ros::node::{context, run_node, DescriptionSource, Network, NodeParams};
 use ros2_client::qos::{Durability, History};
+use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
 use ros2_client::{
-    MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceMapping, ServiceTypeName,
+    MessageTypeName, Name, NodeName, NodeOptions, Parameter, ParameterValue, QosProfile,
+    ServiceMapping, ServiceTypeName,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -105,6 +107,15 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
             &Name::parse("/drape/reset").unwrap(),
             &ServiceTypeName::new("std_srvs", "Trigger"),
             reliable.clone(),
+            reliable.clone(),
+        )
+        .unwrap();
+    let set_params = peer
+        .create_client::<SetParametersRequest, SetParametersResponse>(
+            ServiceMapping::Enhanced,
+            &Name::parse("/drape/set_parameters").unwrap(),
+            &ServiceTypeName::new("rcl_interfaces", "SetParameters"),
+            reliable.clone(),
             reliable,
         )
         .unwrap();
@@ -129,8 +140,11 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     let mut reset_answer = None;
     let mut reset_sent = Instant::now() - Duration::from_secs(10);
     let arm = ["right_shoulder_pitch", "right_elbow"];
+    let mut params_answer = None;
+    let mut params_sent = Instant::now() - Duration::from_secs(10);
+    let mut paused_reported = false;
     let mut k = 0u64;
-    while start.elapsed() < Duration::from_secs(6) {
+    while start.elapsed() < Duration::from_secs(7) {
         k += 1;
         sim_t += 0.01;
         clock
@@ -155,12 +169,34 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
         while let Ok(Some((_, r))) = reset.receive_response() {
             reset_answer = Some(r);
         }
+        // Live parameters through ros2-client's parameter services: pause, and a bad rate.
+        if reset_answer.is_some()
+            && params_answer.is_none()
+            && params_sent.elapsed() > Duration::from_millis(500)
+        {
+            let set = |name: &str, value| Parameter {
+                name: name.into(),
+                value,
+            };
+            let req = SetParametersRequest {
+                parameter: vec![
+                    set("paused", ParameterValue::Boolean(true)).into(),
+                    set("publish_rate", ParameterValue::Double(-5.0)).into(),
+                ],
+            };
+            set_params.send_request(req).unwrap();
+            params_sent = Instant::now();
+        }
+        while let Ok(Some((_, r))) = set_params.receive_response() {
+            params_answer = Some(r);
+        }
         while let Ok(Some((p, _))) = points.take() {
             assert_eq!(p.header.frame_id, "base_link");
             assert_eq!(p.width, 400);
             stamps.push(p.header.stamp.as_nanos() as f64 * 1e-9);
         }
         while let Ok(Some((d, _))) = diags.take() {
+            paused_reported |= d.status[0].message == "paused";
             last_diag = Some(d);
         }
         std::thread::sleep(Duration::from_millis(10));
@@ -200,6 +236,14 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
     let r = reset_answer.expect("~/reset answered");
     assert!(r.success, "{r:?}");
     assert!(value(&d, "resets") >= 1);
+    let p = params_answer.expect("set_parameters answered");
+    let ok: Vec<bool> = p.results.iter().map(|r| r.successful).collect();
+    assert_eq!(
+        ok,
+        [true, false],
+        "paused accepted, negative rate rejected: {p:?}"
+    );
+    assert!(paused_reported, "diagnostics never said paused");
     assert!(
         shutdown < Duration::from_secs(5),
         "shutdown took {shutdown:?}"
