@@ -103,7 +103,7 @@ fn measure(res: usize) -> Row {
         )
         .unwrap();
     let q = QosProfile::publisher_default().history(History::KeepLast { depth: 10 });
-    let mut topic = |name: &str, pkg: &str, ty: &str| {
+    let topic = |name: &str, pkg: &str, ty: &str| {
         peer.create_topic(
             &Name::parse(name).unwrap(),
             MessageTypeName::new(pkg, ty),
