@@ -43,8 +43,11 @@ fn cyclone_python_peer_drives_the_node() {
     let mut node = Command::new(env!("CARGO_BIN_EXE_drape"))
         .args(["node", "--ros-args", "--params-file"])
         .arg(format!("{root}/config/node.yaml"))
-        .args(["-p", "service_mapping:=cyclone", "-p", "publish_rate:=30.0"])
+        .args(["-p", "service_mapping:=cyclone", "-p", "publish_rate:=20.0"])
         .env("ROS_DISTRO", "jazzy")
+        // Exercise the networking conventions: a non-default domain, loopback only.
+        .env("ROS_DOMAIN_ID", "7")
+        .env("ROS_LOCALHOST_ONLY", "1")
         .env("RUST_LOG", "warn")
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -58,7 +61,8 @@ fn cyclone_python_peer_drives_the_node() {
     });
     let py = Command::new("python3")
         .arg(format!("{root}/tests/py/node_interop.py"))
-        .args(["--rate", "30", "--seconds", "4"])
+        .args(["--rate", "20", "--seconds", "4"])
+        .env("ROS_DOMAIN_ID", "7")
         .status();
     let stop_at = Instant::now();
     let _ = Command::new("kill")

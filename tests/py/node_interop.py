@@ -14,6 +14,7 @@ Exit status 0 on success; the failures are printed.
 
 import argparse
 import math
+import os
 import struct
 import sys
 import time
@@ -177,6 +178,11 @@ class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnosti
     status: sequence[DiagnosticStatus]
 
 
+@dataclass
+class MarkerArray(IdlStruct, typename="visualization_msgs::msg::dds_::MarkerArray_"):
+    markers: sequence[Marker]
+
+
 # rmw_cyclonedds puts a (client guid, sequence number) header in front of request and reply.
 @dataclass
 class TriggerRequest(IdlStruct, typename="std_srvs::srv::dds_::Trigger_Request_"):
@@ -207,7 +213,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=30.0, help="wait for the node (s)")
     args = ap.parse_args()
 
-    dp = DomainParticipant(0)
+    dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0") or 0))
     reliable = Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)),
                    Policy.History.KeepLast(10))
     # Deep enough that a slow Python loop does not lose samples it has not taken yet.
@@ -215,6 +221,7 @@ def main():
     js_w = DataWriter(dp, Topic(dp, "rt/joint_states", JointState), qos=reliable)
     mesh_r = DataReader(dp, Topic(dp, f"rt/{args.node}/mesh", Marker), qos=sensor)
     pts_r = DataReader(dp, Topic(dp, f"rt/{args.node}/points", PointCloud2), qos=sensor)
+    obst_r = DataReader(dp, Topic(dp, f"rt/{args.node}/obstacles", MarkerArray), qos=sensor)
     diag_r = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray), qos=reliable)
     rq_w = DataWriter(dp, Topic(dp, f"rq/{args.node}/resetRequest", TriggerRequest), qos=reliable)
     rr_r = DataReader(dp, Topic(dp, f"rr/{args.node}/resetReply", TriggerResponse), qos=reliable)
@@ -253,6 +260,7 @@ def main():
         time.sleep(0.02)
 
     n_mesh = n_pts = 0
+    obstacles = []
     diags = []
     clouds = []
     mesh_sizes = set()
@@ -277,6 +285,9 @@ def main():
         for s in diag_r.take(N=100):
             if isinstance(s, DiagnosticArray):
                 diags.append(s)
+        for s in obst_r.take(N=100):
+            if isinstance(s, MarkerArray):
+                obstacles.append(s)
         time.sleep(0.002)
     elapsed = time.monotonic() - start
     mesh_rate, pts_rate = n_mesh / elapsed, n_pts / elapsed
@@ -294,6 +305,14 @@ def main():
     print(f"largest vertex displacement while the arm swings: {moved:.3f} m")
     if moved < 0.05:
         failures.append(f"cloth barely moved ({moved:.3f} m) while the joints moved")
+
+    if not obstacles:
+        failures.append("no ~/obstacles")
+    else:
+        kinds = sorted({m.type for m in obstacles[-1].markers})
+        print(f"~/obstacles: {len(obstacles[-1].markers)} markers of types {kinds}")
+        if not obstacles[-1].markers:
+            failures.append("~/obstacles is empty for a robot scene")
 
     if not diags:
         failures.append("no /diagnostics")
