@@ -27,6 +27,7 @@ const MOVED: f64 = 0.01;
 
 struct Row {
     res: usize,
+    solver: &'static str,
     latencies_ms: Vec<f64>,
     step_ms: String,
     rtf: String,
@@ -65,10 +66,17 @@ fn diag(d: &DiagnosticArray, key: &str) -> String {
         .map_or_else(|| "?".into(), |kv| kv.value.clone())
 }
 
-fn measure(res: usize) -> Row {
+/// `preview`: the README's real-time preview solver settings (one substep, CG tolerance 1e-2,
+/// at most 50 iterations) instead of the scene's (two substeps, default CG).
+fn measure(res: usize, preview: bool) -> Row {
     let root = env!("CARGO_MANIFEST_DIR");
     let mut scene = Scene::load(format!("{root}/config/robot_towel.yaml").as_ref()).unwrap();
     scene.cloths[0].grid.resolution = [res, res];
+    if preview {
+        scene.solver.substeps = 1;
+        scene.solver.cg_tolerance = 1e-2;
+        scene.solver.cg_max_iterations = 50;
+    }
     if let Some(r) = scene.robot.as_mut() {
         r.urdf = format!("{root}/urdf/drape_bot.urdf");
     }
@@ -184,6 +192,7 @@ fn measure(res: usize) -> Row {
     });
     Row {
         res,
+        solver: if preview { "preview" } else { "scene" },
         latencies_ms,
         step_ms,
         rtf,
@@ -194,11 +203,14 @@ fn main() {
     if !netns::enter("node_latency") {
         return;
     }
-    let rows: Vec<Row> = [24, 64].into_iter().map(measure).collect();
+    let rows: Vec<Row> = [(24, false), (64, false), (64, true)]
+        .into_iter()
+        .map(|(res, preview)| measure(res, preview))
+        .collect();
     let period = 1e3 / RATE;
     println!("\nnode latency: joint state -> first ~/points showing it ({RATE} Hz, {TRIALS} steps of the arm)");
-    println!("| cloth | seen | median ms | p90 ms | max ms | median / max in publish periods | step ms | real-time factor |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("| cloth | solver | seen | median ms | p90 ms | max ms | median / max in publish periods | step ms | real-time factor |");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         let mut l = r.latencies_ms.clone();
         l.sort_by(f64::total_cmp);
@@ -208,7 +220,7 @@ fn main() {
                 .unwrap_or(f64::NAN)
         };
         println!(
-            "| {0}x{0} | {1}/{TRIALS} | {2:.1} | {3:.1} | {4:.1} | {5:.2} / {6:.2} | {7} | {8} |",
+            "| {0}x{0} | {9} | {1}/{TRIALS} | {2:.1} | {3:.1} | {4:.1} | {5:.2} / {6:.2} | {7} | {8} |",
             r.res,
             l.len(),
             at(0.5),
@@ -217,7 +229,8 @@ fn main() {
             at(0.5) / period,
             at(1.0) / period,
             r.step_ms,
-            r.rtf
+            r.rtf,
+            r.solver
         );
     }
 }
