@@ -1,7 +1,8 @@
 //! Interop with a different DDS implementation: `drape node` (RustDDS) and a Python peer on
 //! Eclipse Cyclone DDS (tests/py/node_interop.py) in one private network namespace. The peer
 //! drives the robot with /joint_states and checks ~/mesh and ~/points rates, the cloth
-//! following the arm, /diagnostics and ~/reset. Then the node gets SIGTERM and must exit
+//! following the arm, ~/obstacles, /diagnostics, a bad joint state warned about on /rosout and
+//! counted, and ~/reset. The node runs on ROS_DOMAIN_ID=7 with ROS_LOCALHOST_ONLY=1. Then the node gets SIGTERM and must exit
 //! cleanly and quickly, without error lines.
 //!
 //! Skipped (loudly) only when `cyclonedds` cannot be imported and DRAPE_REQUIRE_INTEROP is

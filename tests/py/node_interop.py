@@ -7,7 +7,8 @@ Publishes /joint_states that swing drape_bot's right arm, and checks that the no
   * publishes ~/mesh (visualization_msgs/Marker, Jazzy layout) and ~/points
     (sensor_msgs/PointCloud2) at the configured rate (within 10 %),
   * moves the cloth as the joints move (vertex positions change),
-  * publishes /diagnostics,
+  * publishes ~/obstacles and /diagnostics,
+  * drops a joint state naming an unknown joint, warns on /rosout and counts it,
   * answers ~/reset (std_srvs/Trigger, rmw_cyclonedds request header).
 Exit status 0 on success; the failures are printed.
 """
@@ -179,6 +180,17 @@ class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnosti
 
 
 @dataclass
+class Log(IdlStruct, typename="rcl_interfaces::msg::dds_::Log_"):
+    stamp: Time
+    level: uint8
+    name: str
+    msg: str
+    file: str
+    function: str
+    line: uint32
+
+
+@dataclass
 class MarkerArray(IdlStruct, typename="visualization_msgs::msg::dds_::MarkerArray_"):
     markers: sequence[Marker]
 
@@ -222,6 +234,8 @@ def main():
     mesh_r = DataReader(dp, Topic(dp, f"rt/{args.node}/mesh", Marker), qos=sensor)
     pts_r = DataReader(dp, Topic(dp, f"rt/{args.node}/points", PointCloud2), qos=sensor)
     obst_r = DataReader(dp, Topic(dp, f"rt/{args.node}/obstacles", MarkerArray), qos=sensor)
+    log_r = DataReader(dp, Topic(dp, "rt/rosout", Log),
+                       qos=Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(100)))
     diag_r = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray), qos=reliable)
     rq_w = DataWriter(dp, Topic(dp, f"rq/{args.node}/resetRequest", TriggerRequest), qos=reliable)
     rr_r = DataReader(dp, Topic(dp, f"rr/{args.node}/resetReply", TriggerResponse), qos=reliable)
@@ -323,6 +337,30 @@ def main():
               f"joint states {kv.get('joint_states')}, dropped {kv.get('dropped_joint_states')}")
         if int(kv.get("joint_states", "0")) == 0:
             failures.append("diagnostics count no joint states: /joint_states did not arrive")
+
+    # A joint the robot does not have: dropped, warned about on /rosout, counted in /diagnostics.
+    now = time.time()
+    stamp = Time(sec=int(now), nanosec=int((now % 1.0) * 1e9))
+    js_w.write(JointState(header=Header(stamp=stamp, frame_id=""), name=["tail_joint"],
+                          position=[0.1], velocity=[], effort=[]))
+    warned = None
+    counted = False
+    deadline = time.monotonic() + 4.0
+    while (warned is None or not counted) and time.monotonic() < deadline:
+        for s in log_r.take(N=100):
+            if isinstance(s, Log) and "tail_joint" in s.msg:
+                warned = s
+        for s in diag_r.take(N=100):
+            if isinstance(s, DiagnosticArray):
+                kv = {k.key: k.value for k in s.status[0].values}
+                counted |= int(kv.get("dropped_unknown_joint", "0")) >= 1
+        time.sleep(0.01)
+    if warned is None:
+        failures.append("no /rosout warning about the unknown joint")
+    else:
+        print(f"/rosout [{warned.level}] {warned.name}: {warned.msg}")
+    if not counted:
+        failures.append("/diagnostics did not count the dropped joint state")
 
     # ~/reset: resend until answered (the reply reader may still be matching).
     answer = None
