@@ -166,7 +166,21 @@ pub struct SimLoop {
 impl SimLoop {
     /// Builds the scene; simulation time 0 is clock time `now`. The robot holds the scene's
     /// t = 0 pose until joint states arrive (its scripted trajectory is not used).
-    pub fn new(scene: Scene, cfg: LoopConfig, now: f64) -> Result<SimLoop, SceneError> {
+    pub fn new(scene: Scene, mut cfg: LoopConfig, now: f64) -> Result<SimLoop, SceneError> {
+        // Rates come validated from the parameters; a bad one from elsewhere falls back.
+        let defaults = LoopConfig::default();
+        for (rate, default) in [
+            (&mut cfg.publish_rate, defaults.publish_rate),
+            (&mut cfg.diagnostics_rate, defaults.diagnostics_rate),
+        ] {
+            if super::params::positive_rate(*rate).is_err() {
+                log::warn!("rate {rate} Hz is unusable; using {default} Hz");
+                *rate = default;
+            }
+        }
+        if !(cfg.obstacles_rate.is_finite() && cfg.obstacles_rate >= 0.0) {
+            cfg.obstacles_rate = 0.0;
+        }
         let (sim, driver) = scene.build_with_robot()?;
         let dt = sim.settings.dt;
         let mut s = SimLoop {
@@ -636,7 +650,18 @@ pub fn run(
         core.sync_clock(n);
     }
     let mut behind = false;
+    let started = Instant::now();
+    let mut warned_no_clock = false;
     while !stop.load(Ordering::Relaxed) {
+        if now.is_none() && !warned_no_clock && started.elapsed() > Duration::from_secs(5) {
+            warned_no_clock = true;
+            out.push(Output::Log {
+                level: Level::Warn,
+                text: "use_sim_time is set but no /clock (rosgraph_msgs/msg/Clock) has arrived \
+                       in 5 s: the simulation waits for it"
+                    .into(),
+            });
+        }
         let wait = match (mode, now) {
             _ if behind => 0.0,
             (ClockMode::Wall, _) => (core.next_wake() - wall.now()).clamp(0.0, 0.05),
