@@ -50,6 +50,16 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Run the live ROS 2 node: joint states in, cloth mesh and points out at a fixed rate.
+    #[cfg(feature = "ros")]
+    Node {
+        /// ROS 2 parameters file (`drape: ros__parameters: ...`).
+        #[arg(long)]
+        params: Option<PathBuf>,
+        /// ROS arguments: `--ros-args --params-file F -r __ns:=/ns -r __node:=name -p k:=v`.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        ros_args: Vec<String>,
+    },
     /// Parse and validate a scene, and print what it builds.
     Check {
         #[arg(long)]
@@ -58,7 +68,12 @@ enum Command {
 }
 
 fn main() {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info")).init();
+    // RustDDS warns about every datagram over 1500 bytes (each mesh); that is normal here.
+    env_logger::Builder::from_env(
+        env_logger::Env::default().default_filter_or("info,rustdds=warn,ros2_client=warn"),
+    )
+    .filter_module("rustdds::network::udp_sender", log::LevelFilter::Error)
+    .init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("drape: error: {e:#}");
         std::process::exit(1);
@@ -78,6 +93,8 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
         } => record(scene, out, duration, distro, frame_id, joints, quiet),
         Command::Study { quick, out } => study(quick, out),
+        #[cfg(feature = "ros")]
+        Command::Node { params, ros_args } => node(params, ros_args),
         Command::Check { scene } => {
             let s = drape::scene::Scene::load(&scene)?;
             let sim = s.build()?;
@@ -198,6 +215,37 @@ fn record(
         } else {
             ""
         }
+    );
+    Ok(())
+}
+
+/// `drape node`: parameters from `--params` and/or `--ros-args --params-file` (the last file
+/// wins), node name and namespace from `-r __node:=` / `-r __ns:=`, then `-p` overrides.
+#[cfg(feature = "ros")]
+fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
+    use drape::ros::node::{parse_ros_args, run_node, NodeParams};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let ra = parse_ros_args(&ros_args)?;
+    let name = ra.node_name.clone().unwrap_or_else(|| "drape".to_string());
+    let file = ra.params_files.last().cloned().or(params).ok_or_else(|| {
+        anyhow::anyhow!("no parameters: pass --params FILE or --ros-args --params-file FILE")
+    })?;
+    let mut p = NodeParams::load(&file, &name)?;
+    if let Some(ns) = ra.namespace {
+        p.namespace = ns;
+    }
+    p.apply_overrides(&ra.overrides)?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("cannot install the Ctrl-C handler")?;
+    let s = run_node(&p, stop).with_context(|| format!("node with {}", file.display()))?;
+    log::info!(
+        "drape node stopped: {} frames published, {} joint states received",
+        s.frames_published,
+        s.joint_states_received
     );
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod cdr;
 pub mod convert;
 mod distro;
 pub mod msg;
+pub mod node;
 pub mod qos;
 pub mod record;
 

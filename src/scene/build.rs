@@ -128,13 +128,16 @@ fn invalid(scene: &Scene, key: String, reason: String) -> SceneError {
 /// Loads the URDF (relative to the scene file) and checks the trajectory's joint names against it.
 fn load_robot(scene: &Scene, r: &RobotSpec) -> Result<RobotDriver, SceneError> {
     let path = scene.base_dir.clone().unwrap_or_default().join(&r.urdf);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        invalid(
-            scene,
-            "robot.urdf".into(),
-            format!("cannot read {}: {e}", path.display()),
-        )
-    })?;
+    let text = match &scene.robot_urdf_text {
+        Some(text) => text.clone(),
+        None => std::fs::read_to_string(&path).map_err(|e| {
+            invalid(
+                scene,
+                "robot.urdf".into(),
+                format!("cannot read {}: {e}", path.display()),
+            )
+        })?,
+    };
     let options = UrdfOptions {
         visual_fallback: r.visual_fallback,
         ..UrdfOptions::default()

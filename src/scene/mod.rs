@@ -249,6 +249,10 @@ pub struct Scene {
     /// Folder relative mesh paths are resolved against (the scene file's folder).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
+    /// URDF text to use instead of reading `robot.urdf` (e.g. from `/robot_description`);
+    /// meshes are still resolved against `robot.urdf`'s folder.
+    #[serde(skip)]
+    pub robot_urdf_text: Option<String>,
 }
 
 /// `robot: { urdf: bot.urdf, trajectory: {names, points}, visual_fallback, attach: [..] }`.

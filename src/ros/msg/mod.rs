@@ -12,6 +12,7 @@ mod geometry;
 mod misc;
 pub(crate) mod schema;
 mod sensor;
+mod srv;
 mod std_msgs;
 mod visualization;
 
@@ -21,6 +22,7 @@ pub use diagnostic::{DiagnosticArray, DiagnosticStatus, KeyValue};
 pub use geometry::{Point, Pose, Quaternion, Transform, TransformStamped, Vector3};
 pub use misc::{Clock, TFMessage};
 pub use sensor::{CompressedImage, JointState, PointCloud2, PointField};
+pub use srv::{TriggerRequest, TriggerResponse};
 pub use std_msgs::{ColorRGBA, Header, RosString};
 pub use visualization::{Marker, MarkerArray, MeshFile, UVCoordinate};
 

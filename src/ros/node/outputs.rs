@@ -1,0 +1,242 @@
+//! Messages the node publishes besides the cloth: `/diagnostics` and the obstacle markers.
+//! Pure functions of the simulation state.
+
+use super::sim_loop::LoopStats;
+use crate::robot::{Geometry, RobotDriver};
+use crate::ros::msg::{
+    ColorRGBA, DiagnosticArray, DiagnosticStatus, Distro, Header, KeyValue, Marker, MarkerArray,
+    Point, Pose, Time, Vector3,
+};
+
+/// What one diagnostics message reports.
+#[derive(Debug, Clone)]
+pub struct DiagnosticsInput<'a> {
+    pub name: &'a str,
+    pub stamp: Time,
+    pub paused: bool,
+    /// Simulated over clock seconds in the window; `None` while paused or with no clock time.
+    pub real_time_factor: Option<f64>,
+    pub step_time_mean: f64,
+    pub step_time_max: f64,
+    pub contacts: usize,
+    pub deepest_penetration: f64,
+    pub energy: f64,
+    pub stats: &'a LoopStats,
+    pub dropped_steps: u64,
+    /// Joint states dropped during the window.
+    pub new_drops: u64,
+    pub new_divergences: u64,
+    pub sim_time: f64,
+}
+
+/// Below this real-time factor the status is WARN.
+pub const SLOW_RTF: f64 = 0.9;
+
+/// One `DiagnosticStatus` named `<name>: simulation`: ERROR after a divergence in the window,
+/// WARN when slower than real time or when inputs were dropped, else OK.
+pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
+    let (level, message) = if d.new_divergences > 0 {
+        (
+            DiagnosticStatus::ERROR,
+            format!("{} divergence(s): cloth restored", d.new_divergences),
+        )
+    } else if d.paused {
+        (DiagnosticStatus::OK, "paused".to_string())
+    } else if d.real_time_factor.is_some_and(|r| r < SLOW_RTF) {
+        (
+            DiagnosticStatus::WARN,
+            format!(
+                "slower than real time (factor {:.2})",
+                d.real_time_factor.unwrap_or(0.0)
+            ),
+        )
+    } else if d.new_drops > 0 {
+        (
+            DiagnosticStatus::WARN,
+            format!("{} bad joint state(s) dropped", d.new_drops),
+        )
+    } else {
+        (DiagnosticStatus::OK, "running".to_string())
+    };
+    let s = d.stats;
+    let kv = |k: &str, v: String| KeyValue {
+        key: k.to_string(),
+        value: v,
+    };
+    let values = vec![
+        kv(
+            "real_time_factor",
+            d.real_time_factor
+                .map_or_else(|| "n/a".into(), |r| format!("{r:.3}")),
+        ),
+        kv(
+            "step_time_mean_ms",
+            format!("{:.3}", d.step_time_mean * 1e3),
+        ),
+        kv("step_time_max_ms", format!("{:.3}", d.step_time_max * 1e3)),
+        kv("sim_time_s", format!("{:.3}", d.sim_time)),
+        kv("contacts", d.contacts.to_string()),
+        kv(
+            "deepest_penetration_m",
+            format!("{:.6}", d.deepest_penetration),
+        ),
+        kv("energy_j", format!("{:.6}", d.energy)),
+        kv("divergences", s.divergences.to_string()),
+        kv("steps", s.steps.to_string()),
+        kv("dropped_steps", d.dropped_steps.to_string()),
+        kv("frames", s.frames.to_string()),
+        kv("joint_states", s.joint_states.to_string()),
+        kv("dropped_joint_states", s.dropped.total().to_string()),
+        kv("dropped_non_finite", s.dropped.non_finite.to_string()),
+        kv("dropped_wrong_length", s.dropped.wrong_length.to_string()),
+        kv("dropped_unknown_joint", s.dropped.unknown_joint.to_string()),
+        kv("dropped_out_of_order", s.dropped.out_of_order.to_string()),
+        kv(
+            "robot_descriptions_loaded",
+            s.descriptions_loaded.to_string(),
+        ),
+        kv(
+            "robot_description_failures",
+            s.description_failures.to_string(),
+        ),
+        kv("resets", s.resets.to_string()),
+    ];
+    DiagnosticArray {
+        header: Header::new(d.stamp, ""),
+        status: vec![DiagnosticStatus {
+            level,
+            name: format!("{}: simulation", d.name),
+            message,
+            hardware_id: d.name.to_string(),
+            values,
+        }],
+    }
+}
+
+/// One marker per collision shape of the robot, at the link poses the solver uses, in the
+/// robot's root frame: spheres, boxes and cylinders as such, capsules as cylinders spanning
+/// their full length, meshes as TRIANGLE_LISTs.
+pub fn obstacle_markers(
+    d: &RobotDriver,
+    distro: Distro,
+    stamp: Time,
+    frame_id: &str,
+) -> MarkerArray {
+    let mut markers = Vec::new();
+    let poses = d.link_poses();
+    for (link, shapes) in d.robot().collision_shapes().iter().enumerate() {
+        let Some(link_pose) = poses.get(link) else {
+            continue;
+        };
+        for (shape_pose, g) in shapes {
+            let world = link_pose.mul(shape_pose);
+            let (r#type, scale, points) = match g {
+                Geometry::Sphere { radius } => (Marker::SPHERE, [2.0 * radius; 3], Vec::new()),
+                Geometry::Box { half_extents } => {
+                    (Marker::CUBE, (2.0 * *half_extents).to_array(), Vec::new())
+                }
+                Geometry::Cylinder { radius, length } => (
+                    Marker::CYLINDER,
+                    [2.0 * radius, 2.0 * radius, *length],
+                    Vec::new(),
+                ),
+                Geometry::Capsule { radius, length } => (
+                    Marker::CYLINDER,
+                    [2.0 * radius, 2.0 * radius, length + 2.0 * radius],
+                    Vec::new(),
+                ),
+                Geometry::Mesh(m) => (
+                    Marker::TRIANGLE_LIST,
+                    [1.0; 3],
+                    m.indices
+                        .iter()
+                        .flatten()
+                        .filter_map(|&i| m.vertices.get(i as usize))
+                        .map(|&v| Point::from(v))
+                        .collect(),
+                ),
+            };
+            markers.push(Marker {
+                distro,
+                header: Header::new(stamp, frame_id),
+                ns: "obstacles".into(),
+                id: i32::try_from(markers.len()).unwrap_or(i32::MAX),
+                r#type,
+                action: Marker::ADD,
+                pose: Pose {
+                    position: world.translation.into(),
+                    orientation: world.rotation.into(),
+                },
+                scale: Vector3 {
+                    x: scale[0],
+                    y: scale[1],
+                    z: scale[2],
+                },
+                color: ColorRGBA::new(0.3, 0.6, 0.9, 0.5),
+                points,
+                ..Marker::default()
+            });
+        }
+    }
+    MarkerArray { markers }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::{JointSource, Robot, UrdfOptions};
+
+    #[test]
+    fn obstacle_markers_follow_links() {
+        let urdf = r#"<robot name="r"><link name="base"/>
+          <link name="arm"><collision><origin xyz="0 0 0.5"/>
+            <geometry><box size="0.2 0.4 1.0"/></geometry></collision></link>
+          <joint name="j" type="prismatic"><parent link="base"/><child link="arm"/>
+            <axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+          </robot>"#;
+        let robot = Robot::from_urdf_str(urdf, None, &UrdfOptions::default()).unwrap();
+        let mut d = RobotDriver::new(robot, urdf.into(), JointSource::Still);
+        let j = d.robot().joint_index("j").unwrap();
+        let mut q = d.robot().zero_positions();
+        q.positions[j] = 0.3;
+        d.set_source(JointSource::Stream(vec![(0.0, q)]), 0.0);
+        let a = obstacle_markers(&d, Distro::Humble, Time::default(), "base");
+        assert_eq!(a.markers.len(), 1);
+        let m = &a.markers[0];
+        assert_eq!(m.r#type, Marker::CUBE);
+        assert_eq!((m.scale.x, m.scale.y, m.scale.z), (0.2, 0.4, 1.0));
+        assert!((m.pose.position.x - 0.3).abs() < 1e-12 && (m.pose.position.z - 0.5).abs() < 1e-12);
+        assert_eq!(m.distro, Distro::Humble);
+    }
+
+    #[test]
+    fn diagnostics_levels() {
+        let stats = LoopStats::default();
+        let mut d = DiagnosticsInput {
+            name: "drape",
+            stamp: Time::default(),
+            paused: false,
+            real_time_factor: Some(1.0),
+            step_time_mean: 0.001,
+            step_time_max: 0.002,
+            contacts: 3,
+            deepest_penetration: 0.0,
+            energy: 0.0,
+            stats: &stats,
+            dropped_steps: 0,
+            new_drops: 0,
+            new_divergences: 0,
+            sim_time: 1.0,
+        };
+        assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::OK);
+        d.real_time_factor = Some(0.5);
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "real_time_factor" && kv.value == "0.500"));
+        d.new_divergences = 1;
+        assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
+    }
+}

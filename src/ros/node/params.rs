@@ -1,0 +1,503 @@
+//! The node's parameters: a ROS 2 style parameters file (`drape: ros__parameters: ...`) and
+//! the ROS command line conventions (`--ros-args --params-file F -r __ns:=/ns -r __node:=n`).
+//!
+//! Pure parsing, no DDS: every rule here has a unit test.
+
+use crate::ros::Distro;
+use serde_yaml_ng::Value;
+use std::path::{Path, PathBuf};
+
+/// Where the robot description comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DescriptionSource {
+    /// The URDF file named by the scene.
+    #[default]
+    File,
+    /// The `/robot_description` topic (transient-local); the scene's URDF file, when it can be
+    /// read, is used until the first description arrives.
+    Topic,
+}
+
+/// Which request/reply mapping the node's services use on the wire. ROS 2 rmw
+/// implementations disagree: Fast DDS uses the RPC-over-DDS "enhanced" mapping, Cyclone DDS
+/// its own header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ServiceWire {
+    /// rmw_fastrtps (default in Humble and Jazzy) and rmw_connextdds.
+    #[default]
+    Enhanced,
+    /// rmw_cyclonedds.
+    Cyclone,
+}
+
+/// Topic names; `~/x` is relative to the node (`/<ns>/<node>/x`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Topics {
+    pub joint_states: String,
+    pub robot_description: String,
+    pub clock: String,
+    pub mesh: String,
+    pub points: String,
+    pub obstacles: String,
+    pub diagnostics: String,
+}
+
+impl Default for Topics {
+    fn default() -> Self {
+        Self {
+            joint_states: "/joint_states".into(),
+            robot_description: "/robot_description".into(),
+            clock: "/clock".into(),
+            mesh: "~/mesh".into(),
+            points: "~/points".into(),
+            obstacles: "~/obstacles".into(),
+            diagnostics: "/diagnostics".into(),
+        }
+    }
+}
+
+/// Everything `drape node` is configured with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeParams {
+    /// Node name (default `drape`) and namespace (default `/`).
+    pub name: String,
+    pub namespace: String,
+    /// Scene file (resolved against the parameters file's folder).
+    pub scene: PathBuf,
+    pub robot_description: DescriptionSource,
+    /// Mesh, points and obstacles messages per second of (simulated) time. Live.
+    pub publish_rate: f64,
+    /// Obstacle markers per second (0: never).
+    pub obstacles_rate: f64,
+    /// Diagnostics per second.
+    pub diagnostics_rate: f64,
+    /// Frame of the outputs; empty: the robot's root link (else `world`).
+    pub frame_id: String,
+    /// Marker layout; `None`: `$ROS_DISTRO`, else Jazzy.
+    pub distro: Option<Distro>,
+    /// Follow `/clock` (rosgraph_msgs/Clock) instead of the wall clock.
+    pub use_sim_time: bool,
+    /// Start paused. Live.
+    pub paused: bool,
+    /// Steps the simulation may be behind before the backlog is dropped.
+    pub max_backlog_steps: u32,
+    pub service_wire: ServiceWire,
+    pub topics: Topics,
+    pub color: [f32; 4],
+}
+
+impl Default for NodeParams {
+    fn default() -> Self {
+        Self {
+            name: "drape".into(),
+            namespace: "/".into(),
+            scene: PathBuf::new(),
+            robot_description: DescriptionSource::File,
+            publish_rate: 30.0,
+            obstacles_rate: 2.0,
+            diagnostics_rate: 1.0,
+            frame_id: String::new(),
+            distro: None,
+            use_sim_time: false,
+            paused: false,
+            max_backlog_steps: 6,
+            service_wire: ServiceWire::Enhanced,
+            topics: Topics::default(),
+            color: [0.85, 0.35, 0.2, 1.0],
+        }
+    }
+}
+
+/// A parameters file or command line the node cannot use; names the file and key.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamsError {
+    #[error("cannot read parameters file {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{origin}: not YAML: {message}")]
+    Yaml { origin: String, message: String },
+    #[error("{origin}: no `ros__parameters` for node `{node}` (expected `{node}:`, `/{node}:` or `/**:` at the top)")]
+    NoSection { origin: String, node: String },
+    #[error("{origin}: parameter `{key}`: {reason}")]
+    Invalid {
+        origin: String,
+        key: String,
+        reason: String,
+    },
+    #[error("command line: {0}")]
+    Args(String),
+}
+
+/// What the command line asked for, ROS style.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct RosArgs {
+    pub params_files: Vec<PathBuf>,
+    pub namespace: Option<String>,
+    pub node_name: Option<String>,
+    /// Single parameters from `-p name:=value`.
+    pub overrides: Vec<(String, String)>,
+}
+
+/// Parses arguments after `--ros-args` (up to `--`): `--params-file F`, `-r __ns:=/ns`,
+/// `-r __node:=name` (also `--remap`), `-p name:=value` (also `--param`). Remaps of topics are
+/// rejected rather than ignored, so a launch file that relies on one fails loudly.
+pub fn parse_ros_args<S: AsRef<str>>(args: &[S]) -> Result<RosArgs, ParamsError> {
+    let mut out = RosArgs::default();
+    let mut it = args.iter().map(|s| s.as_ref());
+    while let Some(a) = it.next() {
+        let mut value = |flag: &str| {
+            it.next()
+                .map(str::to_string)
+                .ok_or_else(|| ParamsError::Args(format!("`{flag}` needs a value")))
+        };
+        match a {
+            "--ros-args" => {}
+            "--" => break,
+            "--params-file" => out.params_files.push(PathBuf::from(value(a)?)),
+            "-r" | "--remap" => {
+                let v = value(a)?;
+                let (from, to) = split_assign(&v)?;
+                match from {
+                    "__ns" => out.namespace = Some(to.to_string()),
+                    "__node" | "__name" => out.node_name = Some(to.to_string()),
+                    _ => {
+                        return Err(ParamsError::Args(format!(
+                            "remap `{v}` is not supported; set topic names in the parameters file"
+                        )))
+                    }
+                }
+            }
+            "-p" | "--param" => {
+                let v = value(a)?;
+                let (k, val) = split_assign(&v)?;
+                out.overrides.push((k.to_string(), val.to_string()));
+            }
+            other => return Err(ParamsError::Args(format!("unknown ROS argument `{other}`"))),
+        }
+    }
+    Ok(out)
+}
+
+fn split_assign(s: &str) -> Result<(&str, &str), ParamsError> {
+    s.split_once(":=")
+        .filter(|(k, _)| !k.is_empty())
+        .ok_or_else(|| ParamsError::Args(format!("expected `name:=value`, got `{s}`")))
+}
+
+impl NodeParams {
+    /// Reads a parameters file; the scene path is resolved against the file's folder.
+    pub fn load(path: &Path, node_name: &str) -> Result<NodeParams, ParamsError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut p = Self::from_yaml(&text, &path.display().to_string(), node_name)?;
+        if p.scene.is_relative() {
+            if let Some(dir) = path.parent() {
+                p.scene = dir.join(&p.scene);
+            }
+        }
+        Ok(p)
+    }
+
+    /// Parses the `ros__parameters` of `node_name` from parameters-file text.
+    pub fn from_yaml(text: &str, origin: &str, node_name: &str) -> Result<NodeParams, ParamsError> {
+        let doc: Value = serde_yaml_ng::from_str(text).map_err(|e| ParamsError::Yaml {
+            origin: origin.into(),
+            message: e.to_string(),
+        })?;
+        let section = [
+            node_name.to_string(),
+            format!("/{node_name}"),
+            "/**".to_string(),
+        ]
+        .iter()
+        .find_map(|k| doc.get(k.as_str()))
+        .or_else(|| {
+            // `/ns/name:` also names this node.
+            doc.as_mapping()?.iter().find_map(|(k, v)| {
+                let k = k.as_str()?;
+                k.rsplit_once('/')
+                    .filter(|(_, n)| *n == node_name)
+                    .map(|_| v)
+            })
+        })
+        .and_then(|s| s.get("ros__parameters"))
+        .ok_or_else(|| ParamsError::NoSection {
+            origin: origin.into(),
+            node: node_name.into(),
+        })?;
+        let mut flat = Vec::new();
+        flatten("", section, &mut flat);
+        let mut p = NodeParams {
+            name: node_name.to_string(),
+            ..NodeParams::default()
+        };
+        for (key, value) in flat {
+            p.set(&key, &value).map_err(|reason| ParamsError::Invalid {
+                origin: origin.into(),
+                key: key.clone(),
+                reason,
+            })?;
+        }
+        p.validate().map_err(|(key, reason)| ParamsError::Invalid {
+            origin: origin.into(),
+            key: key.into(),
+            reason,
+        })?;
+        Ok(p)
+    }
+
+    /// Applies `-p name:=value` overrides (values parsed as YAML scalars).
+    pub fn apply_overrides(&mut self, overrides: &[(String, String)]) -> Result<(), ParamsError> {
+        for (k, v) in overrides {
+            let value: Value =
+                serde_yaml_ng::from_str(v).unwrap_or_else(|_| Value::String(v.clone()));
+            self.set(k, &value).map_err(|reason| ParamsError::Invalid {
+                origin: "command line".into(),
+                key: k.clone(),
+                reason,
+            })?;
+        }
+        self.validate()
+            .map_err(|(key, reason)| ParamsError::Invalid {
+                origin: "command line".into(),
+                key: key.into(),
+                reason,
+            })
+    }
+
+    fn set(&mut self, key: &str, v: &Value) -> Result<(), String> {
+        match key {
+            "scene" => self.scene = PathBuf::from(string(v)?),
+            "robot_description" => {
+                self.robot_description = match string(v)?.as_str() {
+                    "file" => DescriptionSource::File,
+                    "topic" => DescriptionSource::Topic,
+                    other => return Err(format!("expected `file` or `topic`, got `{other}`")),
+                }
+            }
+            "publish_rate" => self.publish_rate = number(v)?,
+            "obstacles_rate" => self.obstacles_rate = number(v)?,
+            "diagnostics_rate" => self.diagnostics_rate = number(v)?,
+            "frame_id" => self.frame_id = string(v)?,
+            "distro" => {
+                let s = string(v)?;
+                self.distro = if s.is_empty() {
+                    None
+                } else {
+                    Some(
+                        s.parse()
+                            .map_err(|e: crate::ros::UnknownDistro| e.to_string())?,
+                    )
+                }
+            }
+            "use_sim_time" => self.use_sim_time = boolean(v)?,
+            "paused" => self.paused = boolean(v)?,
+            "max_backlog_steps" => {
+                let n = number(v)?;
+                if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
+                    return Err(format!("must be an integer in 1..=1000, got {n}"));
+                }
+                self.max_backlog_steps = n as u32;
+            }
+            "service_mapping" => {
+                self.service_wire = match string(v)?.to_ascii_lowercase().as_str() {
+                    "enhanced" | "fastdds" | "fastrtps" => ServiceWire::Enhanced,
+                    "cyclone" | "cyclonedds" => ServiceWire::Cyclone,
+                    other => {
+                        return Err(format!("expected `enhanced` or `cyclone`, got `{other}`"))
+                    }
+                }
+            }
+            "color" => {
+                let Value::Sequence(s) = v else {
+                    return Err("expected [r, g, b, a]".into());
+                };
+                if s.len() != 4 {
+                    return Err(format!("expected 4 components, got {}", s.len()));
+                }
+                for (c, x) in self.color.iter_mut().zip(s) {
+                    let x = number(x)?;
+                    if !(0.0..=1.0).contains(&x) {
+                        return Err(format!("component {x} is outside [0, 1]"));
+                    }
+                    *c = x as f32;
+                }
+            }
+            k if k.starts_with("topics.") => {
+                let t = &mut self.topics;
+                let slot = match &k["topics.".len()..] {
+                    "joint_states" => &mut t.joint_states,
+                    "robot_description" => &mut t.robot_description,
+                    "clock" => &mut t.clock,
+                    "mesh" => &mut t.mesh,
+                    "points" => &mut t.points,
+                    "obstacles" => &mut t.obstacles,
+                    "diagnostics" => &mut t.diagnostics,
+                    _ => return Err("unknown topic".into()),
+                };
+                let name = string(v)?;
+                if name.is_empty() || name.contains(char::is_whitespace) {
+                    return Err(format!("`{name}` is not a topic name"));
+                }
+                *slot = name;
+            }
+            _ => return Err("unknown parameter".into()),
+        }
+        Ok(())
+    }
+
+    /// Cross-field checks; returns the key at fault.
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        if self.scene.as_os_str().is_empty() {
+            return Err(("scene", "missing: name the scene file".into()));
+        }
+        positive_rate(self.publish_rate).map_err(|r| ("publish_rate", r))?;
+        positive_rate(self.diagnostics_rate).map_err(|r| ("diagnostics_rate", r))?;
+        if !(self.obstacles_rate.is_finite() && self.obstacles_rate >= 0.0) {
+            return Err((
+                "obstacles_rate",
+                format!("must be >= 0, got {}", self.obstacles_rate),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A publish rate the node can honour: positive, finite, at most 1 kHz.
+pub fn positive_rate(r: f64) -> Result<(), String> {
+    if r.is_finite() && r > 0.0 && r <= 1000.0 {
+        Ok(())
+    } else {
+        Err(format!("must be in (0, 1000] Hz, got {r}"))
+    }
+}
+
+fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, Value)>) {
+    match v {
+        Value::Mapping(m) => {
+            for (k, v) in m {
+                let k = match k {
+                    Value::String(s) => s.clone(),
+                    other => format!("{other:?}"),
+                };
+                let key = if prefix.is_empty() {
+                    k
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        _ => out.push((prefix.to_string(), v.clone())),
+    }
+}
+
+fn string(v: &Value) -> Result<String, String> {
+    match v {
+        Value::String(s) => Ok(s.clone()),
+        Value::Null => Ok(String::new()),
+        other => Err(format!("expected a string, got {other:?}")),
+    }
+}
+
+fn number(v: &Value) -> Result<f64, String> {
+    v.as_f64()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| format!("expected a number, got {v:?}"))
+}
+
+fn boolean(v: &Value) -> Result<bool, String> {
+    v.as_bool()
+        .ok_or_else(|| format!("expected true or false, got {v:?}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FILE: &str = "
+drape:
+  ros__parameters:
+    scene: robot_towel.yaml
+    robot_description: topic
+    publish_rate: 20
+    use_sim_time: true
+    distro: humble
+    service_mapping: cyclone
+    topics:
+      mesh: cloth/mesh
+";
+
+    #[test]
+    fn reads_nested_ros_parameters() {
+        let p = NodeParams::from_yaml(FILE, "f.yaml", "drape").unwrap();
+        assert_eq!(p.scene, PathBuf::from("robot_towel.yaml"));
+        assert_eq!(p.robot_description, DescriptionSource::Topic);
+        assert_eq!(p.publish_rate, 20.0);
+        assert!(p.use_sim_time);
+        assert_eq!(p.distro, Some(Distro::Humble));
+        assert_eq!(p.service_wire, ServiceWire::Cyclone);
+        assert_eq!(p.topics.mesh, "cloth/mesh");
+        assert_eq!(p.topics.points, "~/points");
+        // Other node names and the wildcard.
+        let renamed = FILE.replace("drape:", "/robots/cloth:");
+        assert!(NodeParams::from_yaml(&renamed, "f", "cloth").is_ok());
+        let wild = FILE.replace("drape:", "/**:");
+        assert!(NodeParams::from_yaml(&wild, "f", "other").is_ok());
+    }
+
+    #[test]
+    fn errors_name_file_and_key() {
+        let e = NodeParams::from_yaml(FILE, "f.yaml", "nobody").unwrap_err();
+        assert!(e.to_string().contains("nobody"), "{e}");
+        let bad = FILE.replace("publish_rate: 20", "publish_rate: -1");
+        let e = NodeParams::from_yaml(&bad, "f.yaml", "drape").unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("f.yaml") && msg.contains("publish_rate"),
+            "{msg}"
+        );
+        let typo = FILE.replace("publish_rate", "publish_rat");
+        let e = NodeParams::from_yaml(&typo, "f.yaml", "drape").unwrap_err();
+        assert!(e.to_string().contains("publish_rat"), "{e}");
+        let bad_topic = FILE.replace("mesh: cloth/mesh", "colour: x");
+        assert!(NodeParams::from_yaml(&bad_topic, "f", "drape").is_err());
+        let no_scene = FILE.replace("scene: robot_towel.yaml", "frame_id: base");
+        let e = NodeParams::from_yaml(&no_scene, "f", "drape").unwrap_err();
+        assert!(e.to_string().contains("scene"), "{e}");
+        assert!(NodeParams::from_yaml("drape: [", "f", "drape").is_err());
+    }
+
+    #[test]
+    fn ros_args_and_overrides() {
+        let a = parse_ros_args(&[
+            "--ros-args",
+            "--params-file",
+            "p.yaml",
+            "-r",
+            "__ns:=/robot1",
+            "-r",
+            "__node:=cloth",
+            "-p",
+            "publish_rate:=15.0",
+        ])
+        .unwrap();
+        assert_eq!(a.params_files, [PathBuf::from("p.yaml")]);
+        assert_eq!(a.namespace.as_deref(), Some("/robot1"));
+        assert_eq!(a.node_name.as_deref(), Some("cloth"));
+        let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
+        p.apply_overrides(&a.overrides).unwrap();
+        assert_eq!(p.publish_rate, 15.0);
+        assert!(parse_ros_args(&["-r", "/joint_states:=/js"]).is_err());
+        assert!(parse_ros_args(&["--params-file"]).is_err());
+        assert!(parse_ros_args(&["-p", "x"]).is_err());
+        assert!(parse_ros_args(&["--enclave", "x"]).is_err());
+        assert!(p
+            .apply_overrides(&[("publish_rate".into(), "fast".into())])
+            .is_err());
+    }
+}
