@@ -29,6 +29,8 @@ pub struct SewReport {
     pub panel_vertices: usize,
     pub welded_vertices: usize,
     pub seam_pairs: usize,
+    /// Edges along the seams after welding, in the simulation's vertex indices.
+    pub seam_edges: Vec<(u32, u32)>,
 }
 
 /// A garment's panels as separate pieces of one cloth, with its seam pairs in global indices.
@@ -256,6 +258,16 @@ pub fn dress(sim: &mut Simulation, scene: &Scene) -> Result<Vec<SewReport>, Garm
             })
             .collect();
         let welded = weld(&sub, &local, &g.name, g.material);
+        let base = done.len() as u32;
+        let seam_edges = welded
+            .seams
+            .iter()
+            .flat_map(|(_, v)| {
+                v.windows(2)
+                    .map(|w| (w[0] + base, w[1] + base))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
         reports.push(SewReport {
             garment: g.name.clone(),
             time,
@@ -265,6 +277,7 @@ pub fn dress(sim: &mut Simulation, scene: &Scene) -> Result<Vec<SewReport>, Garm
             panel_vertices: sub.len(),
             welded_vertices: welded.cloth.len(),
             seam_pairs: local.iter().map(|s| s.pairs.len()).sum(),
+            seam_edges,
         });
         append(&mut done, &mut done_topo, welded.cloth, welded.topology);
     }
