@@ -1,0 +1,58 @@
+//! config/sleeve.yaml: a tube sewn from one panel (a seam joining the panel to itself) around
+//! the raised left upper arm, which then moves: the sleeve closes, welds into a tube and stays on
+//! the arm.
+
+use drape::garment::dress;
+use drape::garment::sew::body_penetration;
+use drape::scene::Scene;
+use drape::Vec3;
+use std::path::Path;
+
+#[test]
+fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sleeve.yaml");
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut bare = scene.clone();
+    bare.garments.clear();
+    let (mut sim, driver) = bare.build_with_robot().unwrap();
+    let mut driver = driver.unwrap();
+    let report = dress(&mut sim, &scene).unwrap().remove(0);
+    assert!(report.max_gap < 1e-3, "gap {}", report.max_gap);
+    assert_eq!(
+        report.welded_vertices,
+        report.panel_vertices - report.seam_pairs
+    );
+    // A tube: the only open edges are the two end rings.
+    let mut edges = std::collections::HashMap::new();
+    for t in &sim.cloth.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let open = edges.values().filter(|&&n| n == 1).count();
+    let ring = (0.38f64 / 0.03).ceil() as usize;
+    assert_eq!(open, 2 * ring, "open edges");
+    let thickness = scene.garments[0].material.thickness;
+    let arm = driver.robot().link_index("left_upper_arm").unwrap();
+    let steps = (3.5 / sim.settings.dt).round() as usize;
+    for _ in 0..steps {
+        let next = sim.time() + sim.settings.dt;
+        driver.advance(&mut sim, next);
+        let m = sim.step().unwrap().clone();
+        assert!(m.max_speed < 5.0, "t {}: speed {}", m.time, m.max_speed);
+        // Still around the arm: the centroid stays within 10 cm of the arm (upper arm or forearm).
+        let pose = driver.link_poses()[arm];
+        let c = sim.cloth.x.iter().copied().sum::<Vec3>() / sim.cloth.len() as f64;
+        let local = pose.inverse_transform_point(c);
+        // The elbow stays straight: upper arm and forearm make one 0.55 m rod along -z.
+        let along = local.z.clamp(-0.55, 0.0);
+        let off = (local - Vec3::new(0.0, 0.0, along)).length();
+        assert!(
+            off < 0.1,
+            "t {}: sleeve centroid {off} m from the arm",
+            m.time
+        );
+    }
+    assert!(body_penetration(&sim) <= 0.1 * thickness);
+}
