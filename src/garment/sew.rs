@@ -134,16 +134,19 @@ pub fn effects(scene: &Scene, cloth: &Cloth, topo: &Topology, sewing: bool) -> E
     set
 }
 
+/// How one garment's sewing ended: simulated time (s), frame steps, largest gap per seam (m).
+pub type Sewn = (f64, usize, Vec<(String, f64)>);
+
 /// Runs the sewing schedule on `sim` (whose cloth holds the assembled garments and whose effects
 /// include their seam springs) until, for every garment, its seams have closed and every gap is
 /// below its tolerance. Returns per garment the time it took, the steps and the final gaps.
 pub fn sew(
     sim: &mut Simulation,
     garments: &[(&GarmentSpec, Vec<SeamPairs>)],
-) -> Result<Vec<(f64, usize, Vec<(String, f64)>)>, GarmentError> {
+) -> Result<Vec<Sewn>, GarmentError> {
     let t0 = sim.time();
     let mut steps = 0;
-    let mut done: Vec<Option<(f64, usize, Vec<(String, f64)>)>> = vec![None; garments.len()];
+    let mut done: Vec<Option<Sewn>> = vec![None; garments.len()];
     loop {
         sim.step().map_err(|e| GarmentError::Sewing {
             garment: garments
