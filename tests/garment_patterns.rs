@@ -35,7 +35,10 @@ fn self_intersecting_outline_is_rejected_naming_the_panel() {
     let mut g = two_panels();
     g.panels[1].outline = vec![[0.0, 0.0], [0.2, 0.3], [0.2, 0.0], [0.0, 0.3]];
     let e = validate(&g).unwrap_err();
-    assert!(matches!(&e, GarmentError::SelfIntersecting { panel, .. } if panel == "right"), "{e}");
+    assert!(
+        matches!(&e, GarmentError::SelfIntersecting { panel, .. } if panel == "right"),
+        "{e}"
+    );
     assert!(e.to_string().contains("'right'"));
 }
 
@@ -44,7 +47,10 @@ fn seam_sides_of_very_different_length_are_rejected_naming_the_seam() {
     let mut g = two_panels();
     g.panels[1].outline = vec![[0.0, 0.0], [0.2, 0.0], [0.2, 0.1], [0.0, 0.1]];
     let e = validate(&g).unwrap_err();
-    assert!(matches!(&e, GarmentError::SeamLength { seam, .. } if seam == "middle"), "{e}");
+    assert!(
+        matches!(&e, GarmentError::SeamLength { seam, .. } if seam == "middle"),
+        "{e}"
+    );
     // 10% apart is within tolerance.
     g.panels[1].outline = vec![[0.0, 0.0], [0.2, 0.0], [0.2, 0.27], [0.0, 0.27]];
     validate(&g).unwrap();
@@ -61,7 +67,10 @@ fn seam_naming_a_missing_panel_is_rejected() {
     );
     g.seams[0].b.panel = "right".into();
     g.seams[0].b.to = 7;
-    assert!(matches!(validate(&g), Err(GarmentError::SeamIndex { index: 7, .. })));
+    assert!(matches!(
+        validate(&g),
+        Err(GarmentError::SeamIndex { index: 7, .. })
+    ));
 }
 
 #[test]
@@ -75,7 +84,10 @@ garments:
         outline: [[0, 0], [1, 1], [1, 0], [0, 1]]
 "#;
     let e = Scene::from_yaml(text, "bad.yaml").unwrap_err().to_string();
-    assert!(e.contains("bad.yaml") && e.contains("garments[0]") && e.contains("'front'"), "{e}");
+    assert!(
+        e.contains("bad.yaml") && e.contains("garments[0]") && e.contains("'front'"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -92,14 +104,24 @@ fn meshes_keep_grain_rest_lengths_and_angles() {
     // An L-shaped outline (a reflex corner) also meshes above 20 deg.
     let mut l = g.clone();
     l.seams.clear();
-    l.panels[0].outline = vec![[0.0, 0.0], [0.3, 0.0], [0.3, 0.1], [0.1, 0.1], [0.1, 0.3], [0.0, 0.3]];
+    l.panels[0].outline = vec![
+        [0.0, 0.0],
+        [0.3, 0.0],
+        [0.3, 0.1],
+        [0.1, 0.1],
+        [0.1, 0.3],
+        [0.0, 0.3],
+    ];
     let m = mesh_garment(&l).unwrap();
     for p in &m.panels {
         for t in &p.triangles {
             assert!(min_angle_deg(t.map(|i| p.points[i as usize])) > 20.0);
         }
         // Every point lies inside the outline's bounding box (nothing outside the cut).
-        assert!(p.points.iter().all(|q| q.x > -1e-12 && q.y > -1e-12 && q.x < 0.3 + 1e-12));
+        assert!(p
+            .points
+            .iter()
+            .all(|q| q.x > -1e-12 && q.y > -1e-12 && q.x < 0.3 + 1e-12));
     }
     let area: f64 = m.panels[0]
         .triangles
@@ -126,7 +148,10 @@ fn seam_sides_are_resampled_to_equal_counts_and_paired_by_orientation() {
     let pb = &mesh.panels[1].points;
     assert_eq!(pa[a.vertices[0] as usize], DVec2::new(0.2, 0.0));
     assert_eq!(pb[b.vertices[0] as usize], DVec2::new(0.0, 0.0));
-    assert_eq!(pb[*b.vertices.last().unwrap() as usize], DVec2::new(0.0, 0.27));
+    assert_eq!(
+        pb[*b.vertices.last().unwrap() as usize],
+        DVec2::new(0.0, 0.27)
+    );
 }
 
 #[test]
@@ -170,7 +195,13 @@ fn weld_merges_pairs_and_bends_across_the_seam() {
     // Rest lengths equal the flat distances (the sheet is flat and unstretched).
     for s in &w.topology.springs {
         let d = (w.cloth.x[s.i as usize] - w.cloth.x[s.j as usize]).length();
-        assert!((d - s.rest).abs() < 1e-9, "spring {}-{}: {d} vs {}", s.i, s.j, s.rest);
+        assert!(
+            (d - s.rest).abs() < 1e-9,
+            "spring {}-{}: {d} vs {}",
+            s.i,
+            s.j,
+            s.rest
+        );
     }
     // Cross-seam stencils exist, vanish on the flat sheet and respond to a fold at the seam.
     let seam_vertices: std::collections::HashSet<u32> = w.seams[0].1.iter().copied().collect();
@@ -180,8 +211,13 @@ fn weld_merges_pairs_and_bends_across_the_seam() {
         .iter()
         .filter(|s| seam_vertices.contains(&s.idx[1]) && !seam_vertices.contains(&s.idx[0]))
         .collect();
-    assert!(cross.len() >= pairs - 2, "{} cross-seam stencils", cross.len());
-    let eval = |x: &[Vec3], s: &Stencil<3>| (0..3).map(|k| x[s.idx[k] as usize] * s.w[k]).sum::<Vec3>();
+    assert!(
+        cross.len() >= pairs - 2,
+        "{} cross-seam stencils",
+        cross.len()
+    );
+    let eval =
+        |x: &[Vec3], s: &Stencil<3>| (0..3).map(|k| x[s.idx[k] as usize] * s.w[k]).sum::<Vec3>();
     // Flat sheet: no out-of-plane component (the stencils' neighbours are within 30 deg of
     // collinear, so like the panels' own free-mesh stencils they leave a small in-plane residue).
     for s in &cross {
@@ -194,4 +230,67 @@ fn weld_merges_pairs_and_bends_across_the_seam() {
         }
     }
     assert!(cross.iter().all(|s| eval(&folded, s).z.abs() > 1e-3));
+}
+
+#[test]
+fn weld_keeps_mass_and_seam_springs_match_finite_differences() {
+    use drape::effects::{Effect, State};
+    use drape::garment::seam::SeamSprings;
+    use drape::integrate::PatternBuilder;
+    let g = two_panels();
+    let (cloth, seams) = assemble(&g).unwrap();
+    let w = weld(&cloth, &seams, "test", g.material);
+    let before: f64 = cloth.mass.iter().sum();
+    let after: f64 = w.cloth.mass.iter().sum();
+    assert!((before - after).abs() < 1e-15 * before.max(1.0));
+    // The flat panels' total mass is density x area (2 x 0.2 x 0.3 m^2).
+    assert!((before - g.material.density * 0.12).abs() < 1e-12);
+
+    // Seam springs halfway through closing: forces are minus the gradient of the spring energy
+    // at frozen rest length, Jacobians match central differences of the forces.
+    let pairs = seams[0].pairs.clone();
+    let springs = SeamSprings::new(pairs.clone(), &cloth.x, 300.0, 0.0, 1.0);
+    let n = cloth.len();
+    let mut x = cloth.x.clone();
+    for (k, p) in x.iter_mut().enumerate() {
+        p.z += 0.01 * ((k as f64) * 0.7).sin();
+    }
+    let v = vec![Vec3::ZERO; n];
+    let t = 0.5;
+    let forces = |x: &[Vec3]| {
+        let mut f = vec![Vec3::ZERO; n];
+        springs.add_forces(&State { t, x, v: &v }, &mut f);
+        f
+    };
+    let mut pb = PatternBuilder::new();
+    springs.declare(&mut pb);
+    let mut dfdx = pb.build(n);
+    let mut dfdv = dfdx.clone();
+    dfdx.clear();
+    dfdv.clear();
+    springs.add_jacobians(&State { t, x: &x, v: &v }, &mut dfdx, &mut dfdv);
+    let h = 1e-6;
+    for &(a, _) in pairs.iter().take(4) {
+        for axis in 0..3 {
+            let mut xp = x.clone();
+            let mut xm = x.clone();
+            xp[a as usize][axis] += h;
+            xm[a as usize][axis] -= h;
+            let (fp, fm) = (forces(&xp), forces(&xm));
+            for j in 0..n {
+                let fd = (fp[j] - fm[j]) / (2.0 * h);
+                let (cols, blocks) = dfdx.row(j);
+                let jac = cols
+                    .iter()
+                    .position(|&c| c == a)
+                    .map(|k| blocks[k].col(axis))
+                    .unwrap_or(Vec3::ZERO);
+                // Stretched springs (the transverse term is not clamped): exact up to O(h^2).
+                assert!(
+                    (fd - jac).length() < 1e-4 * 300.0,
+                    "row {j} col {a}.{axis}: {fd} vs {jac}"
+                );
+            }
+        }
+    }
 }

@@ -21,8 +21,8 @@ fn shirt() -> Scene {
 fn dressed(scene: &Scene) -> (Simulation, RobotDriver, SewReport) {
     let mut bare = scene.clone();
     bare.garments.clear();
-    let (mut sim, driver) = bare.build_with_robot().unwrap();
-    let mut reports = dress(&mut sim, scene).unwrap();
+    let (mut sim, mut driver) = bare.build_with_robot().unwrap();
+    let mut reports = dress(&mut sim, scene, driver.as_mut()).unwrap();
     (sim, driver.unwrap(), reports.remove(0))
 }
 

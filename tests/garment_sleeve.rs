@@ -1,6 +1,6 @@
 //! config/sleeve.yaml: a tube sewn from one panel (a seam joining the panel to itself) around
-//! the raised left upper arm, which then moves: the sleeve closes, welds into a tube and stays on
-//! the arm.
+//! the raised left upper arm, which then moves: the sleeve closes, welds into a tube, its
+//! shoulder end follows the arm link and the rest stays around the arm.
 
 use drape::garment::dress;
 use drape::garment::sew::body_penetration;
@@ -16,7 +16,9 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
     bare.garments.clear();
     let (mut sim, driver) = bare.build_with_robot().unwrap();
     let mut driver = driver.unwrap();
-    let report = dress(&mut sim, &scene).unwrap().remove(0);
+    let report = dress(&mut sim, &scene, Some(&mut driver))
+        .unwrap()
+        .remove(0);
     assert!(report.max_gap < 1e-3, "gap {}", report.max_gap);
     assert_eq!(
         report.welded_vertices,
@@ -35,6 +37,20 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
     assert_eq!(open, 2 * ring, "open edges");
     let thickness = scene.garments[0].material.thickness;
     let arm = driver.robot().link_index("left_upper_arm").unwrap();
+    // The shoulder-end ring is attached to the arm and keeps its offset in the arm's frame.
+    let held: Vec<(usize, Vec3)> = sim
+        .cloth
+        .kinematic
+        .iter()
+        .map(|(i, _)| {
+            let i = *i as usize;
+            (
+                i,
+                driver.link_poses()[arm].inverse_transform_point(sim.cloth.x[i]),
+            )
+        })
+        .collect();
+    assert!(held.len() >= ring / 2, "{} attached vertices", held.len());
     let steps = (3.5 / sim.settings.dt).round() as usize;
     for _ in 0..steps {
         let next = sim.time() + sim.settings.dt;
@@ -55,4 +71,20 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
         );
     }
     assert!(body_penetration(&sim) <= 0.1 * thickness);
+    let pose = driver.link_poses()[arm];
+    for (i, local) in held {
+        assert!((pose.inverse_transform_point(sim.cloth.x[i]) - local).length() < 1e-9);
+    }
+}
+
+#[test]
+fn attachment_to_a_missing_link_is_a_clear_error() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sleeve.yaml");
+    let mut scene = Scene::load(&path).unwrap();
+    scene.garments[0].attach[0].link = "tentacle".into();
+    let e = scene.build().err().expect("build fails").to_string();
+    assert!(
+        e.contains("sleeve") && e.contains("attach[0]") && e.contains("'tentacle'"),
+        "{e}"
+    );
 }

@@ -16,7 +16,10 @@ pub mod weld;
 
 pub use mesh::{mesh_garment, GarmentMesh, PanelMesh, MIN_ANGLE_DEG};
 pub use sew::{dress, sew, SewReport};
-pub use spec::{GarmentSpec, PanelSpec, PlacementSpec, SeamSide, SeamSpec, SewingSpec, WrapSpec};
+pub use spec::{
+    GarmentAttachSpec, GarmentSpec, PanelSpec, PlacementSpec, SeamSide, SeamSpec, SewingSpec,
+    WrapSpec,
+};
 pub use weld::{weld, Welded};
 
 /// A pattern, seam or sewing problem, naming the garment, panel or seam at fault.

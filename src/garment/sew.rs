@@ -4,13 +4,15 @@
 use super::mesh::mesh_garment;
 use super::placement::place;
 use super::seam::{gaps, SeamPairs, SeamSprings};
-use super::spec::GarmentSpec;
+use super::spec::{GarmentAttachSpec, GarmentSpec};
 use super::weld::{weld, Topology};
 use super::{pattern, GarmentError};
-use crate::cloth::{Cloth, Panel};
+use crate::cloth::topology::Spring;
+use crate::cloth::{Cloth, Material, Panel};
 use crate::effects::{
     AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, VelocityDiffusion, Wind,
 };
+use crate::robot::RobotDriver;
 use crate::scene::{EffectKind, Scene};
 use crate::sim::Simulation;
 use crate::Vec3;
@@ -71,24 +73,40 @@ pub fn assemble(g: &GarmentSpec) -> Result<(Cloth, Vec<SeamPairs>), GarmentError
     Ok((cloth, seams))
 }
 
-/// The scene's effects over a garment's topology. `sewing` drops gravity and wind.
+/// The scene's effects over garments' topology (each spring, stencil and vertex with its own
+/// garment's material). `sewing` drops gravity and wind.
 pub fn effects(scene: &Scene, cloth: &Cloth, topo: &Topology, sewing: bool) -> EffectSet {
     let mut set = EffectSet::new();
-    let Some(material) = cloth.pieces.first().map(|p| p.material) else {
-        return set;
+    let per_edge = |f: fn(&Material) -> f64| -> (Vec<(u32, u32)>, Vec<f64>) {
+        topo.springs
+            .iter()
+            .zip(&topo.spring_material)
+            .filter(|(_, m)| f(m) > 0.0)
+            .map(|(s, m)| ((s.i, s.j), f(m)))
+            .unzip()
     };
-    let edges: Vec<(u32, u32)> = topo.springs.iter().map(|s| (s.i, s.j)).collect();
     for kind in &scene.effects {
         match kind {
             EffectKind::Gravity if !sewing => {
                 set.push_gravity(Gravity::new(Vec3::from(scene.gravity), &cloth.mass))
             }
-            EffectKind::Stretch if material.stretch > 0.0 => set.push(Box::new(Springs::new(
-                "stretch",
-                topo.springs.clone(),
-                vec![material.stretch; topo.springs.len()],
-                "garments.material.stretch".into(),
-            ))),
+            EffectKind::Stretch => {
+                let (springs, k): (Vec<Spring>, Vec<f64>) = topo
+                    .springs
+                    .iter()
+                    .zip(&topo.spring_material)
+                    .filter(|(_, m)| m.stretch > 0.0)
+                    .map(|(s, m)| (*s, m.stretch))
+                    .unzip();
+                if !springs.is_empty() {
+                    set.push(Box::new(Springs::new(
+                        "stretch",
+                        springs,
+                        k,
+                        "garments.material.stretch".into(),
+                    )));
+                }
+            }
             EffectKind::Bending if !topo.bending.is_empty() => set.push(Box::new(Bending::new(
                 topo.bending.clone(),
                 topo.bending_rigidity.clone(),
@@ -107,24 +125,20 @@ pub fn effects(scene: &Scene, cloth: &Cloth, topo: &Topology, sewing: bool) -> E
                 }
             }
             EffectKind::Damping => {
-                let d = material.damping;
-                if d.spring > 0.0 {
-                    set.push(Box::new(SpringDamping::new(
-                        edges.clone(),
-                        vec![d.spring; edges.len()],
-                    )));
+                let (pairs, kd) = per_edge(|m| m.damping.spring);
+                if !pairs.is_empty() {
+                    set.push(Box::new(SpringDamping::new(pairs, kd)));
                 }
-                if d.air > 0.0 {
-                    set.push(Box::new(AirDrag::new(
-                        &vec![d.air; cloth.len()],
-                        &cloth.mass,
-                    )));
+                let mut air = vec![0.0; cloth.len()];
+                for p in &cloth.pieces {
+                    air[p.vertices()].fill(p.material.damping.air);
                 }
-                if d.diffusion > 0.0 {
-                    set.push(Box::new(VelocityDiffusion::new(
-                        edges.clone(),
-                        vec![d.diffusion; edges.len()],
-                    )));
+                if air.iter().any(|&a| a > 0.0) {
+                    set.push(Box::new(AirDrag::new(&air, &cloth.mass)));
+                }
+                let (pairs, k) = per_edge(|m| m.damping.diffusion);
+                if !pairs.is_empty() {
+                    set.push(Box::new(VelocityDiffusion::new(pairs, k)));
                 }
             }
             // Free meshes resist shear with their own edges; skip-one and twist need a lattice.
@@ -198,8 +212,13 @@ pub fn sew(
 /// Dresses the scene's garments onto the body in `sim`: the garments are assembled and sewn
 /// together (each with its own schedule), each is welded into one piece, and the simulation then
 /// continues from t = 0 with the welded garments, at rest, under the scene's effects (gravity on).
-/// Scenes with garments hold no other cloth.
-pub fn dress(sim: &mut Simulation, scene: &Scene) -> Result<Vec<SewReport>, GarmentError> {
+/// Scenes with garments hold no other cloth. Garment attachments bind to the robot's links through
+/// `driver` (required when a garment has any).
+pub fn dress(
+    sim: &mut Simulation,
+    scene: &Scene,
+    mut driver: Option<&mut RobotDriver>,
+) -> Result<Vec<SewReport>, GarmentError> {
     let mut all = Cloth::new();
     let mut parts = Vec::new();
     let mut sewing_springs = Vec::new();
@@ -282,7 +301,11 @@ pub fn dress(sim: &mut Simulation, scene: &Scene) -> Result<Vec<SewReport>, Garm
             seam_pairs: local.iter().map(|s| s.pairs.len()).sum(),
             seam_edges,
         });
+        let first = done.len();
         append(&mut done, &mut done_topo, welded.cloth, welded.topology);
+        for (k, a) in g.attach.iter().enumerate() {
+            attach(sim, driver.as_deref_mut(), &mut done, first, g, k, a)?;
+        }
     }
     done.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
     let set = effects(scene, &done, &done_topo, false);
@@ -304,6 +327,53 @@ pub fn sub_cloth(cloth: &Cloth, pieces: std::ops::Range<usize>) -> (Cloth, u32) 
         out.v[range].copy_from_slice(&cloth.v[p.vertices()]);
     }
     (out, first as u32)
+}
+
+/// Attaches the welded garment's vertices (from `first` on) near `a.point` to `a.link`.
+fn attach(
+    sim: &mut Simulation,
+    driver: Option<&mut RobotDriver>,
+    done: &mut Cloth,
+    first: usize,
+    g: &GarmentSpec,
+    k: usize,
+    a: &GarmentAttachSpec,
+) -> Result<(), GarmentError> {
+    let bad = |reason: String| GarmentError::Invalid {
+        garment: g.name.clone(),
+        reason: format!("attach[{k}]: {reason}"),
+    };
+    let Some(driver) = driver else {
+        return Err(bad("needs a robot".into()));
+    };
+    let link = driver
+        .robot()
+        .link_index(&a.link)
+        .ok_or_else(|| bad(format!("the robot has no link named '{}'", a.link)))?;
+    let pose = driver.link_poses()[link];
+    let frame = match driver.frame_of(link) {
+        Some(f) => f,
+        None => {
+            let f = sim.frames.add(&format!("robot:{}", a.link), pose);
+            driver.bind_frame(link, f);
+            f
+        }
+    };
+    let centre = pose.transform_point(Vec3::from(a.point));
+    let picked: Vec<u32> = (first..done.len())
+        .filter(|&i| (done.x[i] - centre).length() <= a.radius)
+        .map(|i| i as u32)
+        .collect();
+    if picked.is_empty() {
+        return Err(bad(format!(
+            "no garment vertex within {} m of {:?} in link '{}'",
+            a.radius, a.point, a.link
+        )));
+    }
+    for v in picked {
+        done.attach(v, frame, &pose);
+    }
+    Ok(())
 }
 
 /// Appends a welded garment (one piece) to the cloth of the dressed garments.
@@ -332,6 +402,7 @@ fn append(done: &mut Cloth, topo: &mut Topology, c: Cloth, t: Topology) {
         s.idx = s.idx.map(|i| i + off);
         s
     }));
+    topo.spring_material.extend(t.spring_material);
     topo.bending_rigidity.extend(t.bending_rigidity);
 }
 

@@ -19,6 +19,19 @@ pub struct GarmentSpec {
     pub seams: Vec<SeamSpec>,
     #[serde(default)]
     pub sewing: SewingSpec,
+    /// Garment vertices held by robot links once the garment is welded.
+    #[serde(default)]
+    pub attach: Vec<GarmentAttachSpec>,
+}
+
+/// Welded garment vertices within `radius` of `point` (in the link's frame, at t = 0) follow the
+/// link, keeping their offset: `{ link: left_upper_arm, point: [0, 0, -0.04], radius: 0.07 }`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentAttachSpec {
+    pub link: String,
+    pub point: [f64; 3],
+    pub radius: f64,
 }
 
 fn edge_length() -> f64 {

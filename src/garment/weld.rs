@@ -16,10 +16,13 @@ use crate::Vec3;
 use glam::DVec2;
 use std::collections::HashMap;
 
-/// Elastic topology of a cloth: stretch springs and bending stencils with their rigidities.
+/// Elastic topology of a cloth: stretch springs and bending stencils, each with the material of
+/// the garment it belongs to.
 #[derive(Debug, Clone, Default)]
 pub struct Topology {
     pub springs: Vec<Spring>,
+    /// Per spring: the material it was cut from (stiffness and damping).
+    pub spring_material: Vec<Material>,
     pub bending: Vec<Stencil<3>>,
     pub bending_rigidity: Vec<f64>,
 }
@@ -29,7 +32,10 @@ impl Topology {
     pub fn of_pieces(pieces: &[Piece]) -> Topology {
         let mut t = Topology::default();
         for p in pieces {
-            t.springs.extend(springs(p, SpringKind::Structural));
+            let s = springs(p, SpringKind::Structural);
+            t.spring_material
+                .extend(std::iter::repeat_n(p.material, s.len()));
+            t.springs.extend(s);
             for (along_u, b) in [(true, p.material.bend_warp), (false, p.material.bend_weft)] {
                 let s = bending_stencils(p, along_u);
                 t.bending_rigidity.extend(std::iter::repeat_n(b, s.len()));
@@ -132,6 +138,7 @@ pub fn weld(cloth: &Cloth, seams: &[SeamPairs], name: &str, material: Material) 
 
     // Bending inside panels, remapped.
     let mut topology = Topology {
+        spring_material: vec![material; spring_list.len()],
         springs: spring_list,
         ..Topology::default()
     };
