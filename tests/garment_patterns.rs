@@ -294,3 +294,60 @@ fn weld_keeps_mass_and_seam_springs_match_finite_differences() {
         }
     }
 }
+
+#[test]
+fn bad_material_and_schedule_values_are_rejected_by_key() {
+    let mut g = two_panels();
+    g.material.stretch = 0.0;
+    let e = validate(&g).unwrap_err().to_string();
+    assert!(
+        e.contains("'test'") && e.contains("material.stretch"),
+        "{e}"
+    );
+    let mut g = two_panels();
+    g.sewing.max_time = g.sewing.close_time;
+    assert!(validate(&g)
+        .unwrap_err()
+        .to_string()
+        .contains("sewing.max_time"));
+    let mut g = two_panels();
+    g.edge_length = 1e-5;
+    let e = validate(&g).unwrap_err().to_string();
+    assert!(e.contains("'left'") && e.contains("triangles"), "{e}");
+}
+
+/// The two panels as a scene without a body: sewing in free space.
+fn two_panel_scene(sewing: &str) -> String {
+    let g = serde_yaml_ng::to_string(&two_panels()).unwrap();
+    let g = g.replace("sewing:", "old_sewing:");
+    let mut garment: serde_yaml_ng::Value = serde_yaml_ng::from_str(&g).unwrap();
+    if let serde_yaml_ng::Value::Mapping(m) = &mut garment {
+        m.remove("old_sewing");
+        m.insert("sewing".into(), serde_yaml_ng::from_str(sewing).unwrap());
+    }
+    let garments = serde_yaml_ng::to_string(&vec![garment]).unwrap();
+    format!("effects: [gravity, stretch, bending, damping]\nsolver: {{ integrator: implicit, dt: 0.01 }}\ngarments:\n{}", indent(&garments))
+}
+
+fn indent(s: &str) -> String {
+    s.lines().map(|l| format!("  {l}\n")).collect()
+}
+
+#[test]
+fn sewing_in_free_space_welds_and_a_weak_seam_fails_naming_it() {
+    let ok =
+        two_panel_scene("{ stiffness: 2000, close_time: 0.3, tolerance: 0.001, max_time: 2.0 }");
+    let scene = Scene::from_yaml(&ok, "two.yaml").unwrap_or_else(|e| panic!("{e}\n{ok}"));
+    let sim = scene.build().unwrap();
+    let (cloth, seams) = assemble(&scene.garments[0]).unwrap();
+    assert_eq!(sim.cloth.len(), cloth.len() - seams[0].pairs.len());
+    assert_eq!(sim.time(), 0.0);
+    // Gravity is on again after the weld.
+    assert!(sim.effects().names().contains(&"gravity"));
+
+    let weak =
+        two_panel_scene("{ stiffness: 0.001, close_time: 0.1, tolerance: 0.001, max_time: 0.3 }");
+    let scene = Scene::from_yaml(&weak, "weak.yaml").unwrap();
+    let e = scene.build().err().expect("sewing fails").to_string();
+    assert!(e.contains("seam 'middle'") && e.contains("gap"), "{e}");
+}

@@ -123,6 +123,7 @@ pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
             reason: format!("edge_length {} must be > 0", g.edge_length),
         });
     }
+    validate_parameters(g)?;
     for (k, p) in g.panels.iter().enumerate() {
         if g.panels[..k].iter().any(|q| q.name == p.name) {
             return Err(GarmentError::Invalid {
@@ -131,6 +132,25 @@ pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
             });
         }
         validate_outline(p)?;
+        // Refinement halves triangles above the equilateral area of the target edge.
+        let triangles = 2.0 * signed_area(&outline(p)).abs()
+            / (3f64.sqrt() / 4.0 * g.edge_length * g.edge_length);
+        if triangles > MAX_TRIANGLES {
+            return Err(GarmentError::Outline {
+                panel: p.name.clone(),
+                reason: format!(
+                    "would mesh into ~{triangles:.0} triangles at edge_length {} (limit {MAX_TRIANGLES})",
+                    g.edge_length
+                ),
+            });
+        }
+        let pose = &p.placement.pose;
+        if pose.xyz.iter().chain(&pose.rpy).any(|v| !v.is_finite()) || !p.grain.is_finite() {
+            return Err(GarmentError::Outline {
+                panel: p.name.clone(),
+                reason: "has a non-finite placement pose or grain".into(),
+            });
+        }
         if let Some(w) = &p.placement.wrap {
             if !(w.radius.is_finite() && w.radius > 0.0) {
                 return Err(GarmentError::Outline {
@@ -148,6 +168,60 @@ pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
         .collect();
     for s in &g.seams {
         validate_seam(g, s, &mut used)?;
+    }
+    Ok(())
+}
+
+/// Largest estimated triangle count of one panel.
+pub const MAX_TRIANGLES: f64 = 1e6;
+
+/// Material, sewing schedule and attachment values.
+fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
+    let m = &g.material;
+    let s = &g.sewing;
+    let checks: [(&str, f64, bool); 15] = [
+        ("material.density", m.density, true),
+        ("material.stretch", m.stretch, true),
+        ("material.thickness", m.thickness, true),
+        ("material.shear", m.shear, false),
+        ("material.skip_one", m.skip_one, false),
+        ("material.bend_warp", m.bend_warp, false),
+        ("material.bend_weft", m.bend_weft, false),
+        ("material.twist", m.twist, false),
+        ("material.friction", m.friction, false),
+        ("material.damping.spring", m.damping.spring, false),
+        ("material.damping.air", m.damping.air, false),
+        ("material.damping.diffusion", m.damping.diffusion, false),
+        ("sewing.stiffness", s.stiffness, true),
+        ("sewing.tolerance", s.tolerance, true),
+        ("sewing.close_time", s.close_time, false),
+    ];
+    for (key, v, strictly) in checks {
+        let ok = v.is_finite() && if strictly { v > 0.0 } else { v >= 0.0 };
+        if !ok {
+            let want = if strictly { "> 0" } else { ">= 0" };
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!("{key} = {v} must be finite and {want}"),
+            });
+        }
+    }
+    if !(s.max_time.is_finite() && s.max_time > s.close_time) {
+        return Err(GarmentError::Invalid {
+            garment: g.name.clone(),
+            reason: format!(
+                "sewing.max_time = {} must be finite and > close_time ({})",
+                s.max_time, s.close_time
+            ),
+        });
+    }
+    for (k, a) in g.attach.iter().enumerate() {
+        if !(a.radius.is_finite() && a.radius > 0.0) || a.point.iter().any(|v| !v.is_finite()) {
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!("attach[{k}]: point must be finite and radius > 0"),
+            });
+        }
     }
     Ok(())
 }

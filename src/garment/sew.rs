@@ -280,6 +280,28 @@ pub fn dress(
             })
             .collect();
         let welded = weld(&sub, &local, &g.name, g.material);
+        if let Some(t) = welded
+            .cloth
+            .triangles
+            .iter()
+            .position(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+        {
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!(
+                    "welding collapses triangle {t}: a seam joins two vertices of one triangle \
+                     (seam too short for edge_length {})",
+                    g.edge_length
+                ),
+            });
+        }
+        log::info!(
+            "garment '{}': sewn in {time:.2} s ({steps} steps), largest gap {:.3} mm, {} -> {} vertices",
+            g.name,
+            seam_gaps.iter().map(|s| s.1).fold(0.0, f64::max) * 1e3,
+            sub.len(),
+            welded.cloth.len()
+        );
         let base = done.len() as u32;
         let seam_edges = welded
             .seams
