@@ -88,3 +88,39 @@ fn attachment_to_a_missing_link_is_a_clear_error() {
         "{e}"
     );
 }
+
+#[test]
+fn shirt_and_sleeve_are_sewn_together_as_two_garments() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
+    let sleeve = Scene::load(&dir.join("sleeve.yaml")).unwrap();
+    let mut scene = Scene::load(&dir.join("shirt.yaml")).unwrap();
+    scene.garments.push(sleeve.garments[0].clone());
+    scene.robot = sleeve.robot.clone();
+    let mut bare = scene.clone();
+    bare.garments.clear();
+    let (mut sim, driver) = bare.build_with_robot().unwrap();
+    let mut driver = driver.unwrap();
+    let reports = dress(&mut sim, &scene, Some(&mut driver)).unwrap();
+    assert_eq!(reports.len(), 2);
+    let total: usize = reports.iter().map(|r| r.welded_vertices).sum();
+    assert_eq!(sim.cloth.len(), total);
+    assert_eq!(sim.cloth.pieces.len(), 2);
+    for (r, p) in reports.iter().zip(&sim.cloth.pieces) {
+        assert!(r.max_gap < 1e-3, "{}: {}", r.garment, r.max_gap);
+        assert_eq!(p.name, r.garment);
+        assert_eq!(r.welded_vertices, r.panel_vertices - r.seam_pairs);
+    }
+    // Only the sleeve's vertices are attached.
+    let sleeve_range = sim.cloth.pieces[1].vertices();
+    assert!(!sim.cloth.kinematic.is_empty());
+    assert!(sim
+        .cloth
+        .kinematic
+        .iter()
+        .all(|(i, _)| sleeve_range.contains(&(*i as usize))));
+    for _ in 0..30 {
+        let next = sim.time() + sim.settings.dt;
+        driver.advance(&mut sim, next);
+        sim.step().unwrap();
+    }
+}

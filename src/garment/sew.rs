@@ -270,7 +270,15 @@ pub fn dress(
     let mut done = Cloth::new();
     let mut done_topo = Topology::default();
     let mut reports = Vec::new();
-    for ((g, seams, pieces), (time, steps, seam_gaps)) in parts.into_iter().zip(results) {
+    for ((g, seams, pieces), (time, steps, _)) in parts.into_iter().zip(results) {
+        // Gaps as welded (a garment that closed early kept sewing while the others closed).
+        let seam_gaps: Vec<(String, f64)> = seams
+            .iter()
+            .map(|s| {
+                let m = gaps(&sim.cloth.x, &s.pairs).into_iter().fold(0.0, f64::max);
+                (s.name.clone(), m)
+            })
+            .collect();
         let (sub, off) = sub_cloth(&sim.cloth, pieces);
         let local: Vec<SeamPairs> = seams
             .iter()
