@@ -3,8 +3,12 @@
 //!
 //! Stages: [`pattern`] validates outlines and seams, [`mesh`] resamples seams and meshes each
 //! panel, [`placement`] puts panels in the world, [`seam`] pairs seam vertices and holds the
-//! sewing springs, [`sew`] runs the sewing schedule and measures gaps, [`weld`] merges seam pairs
-//! and rebuilds springs and bending across the seams.
+//! sewing springs, [`sew`] runs the sewing schedule, welds, attaches to links and hands the
+//! simulation back at t = 0, [`weld`] merges seam pairs and rebuilds springs and bending across
+//! the seams; [`spec`] is the `garments:` section of a scene file.
+//!
+//! Dressing happens while a scene is built, with the robot in its t = 0 pose, so a recording or
+//! the live node only ever sees the welded garments.
 
 pub mod mesh;
 pub mod pattern;
