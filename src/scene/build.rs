@@ -114,6 +114,10 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
     if let Some(stage) = collision {
         sim.set_collision(stage);
     }
+    if !scene.garments.is_empty() {
+        crate::garment::dress(&mut sim, scene, driver.as_mut())
+            .map_err(|e| invalid(scene, "garments".into(), e.to_string()))?;
+    }
     Ok((sim, driver))
 }
 

@@ -235,7 +235,11 @@ pub struct Scene {
     pub wind: Option<WindSpec>,
     #[serde(default)]
     pub frames: Vec<FrameSpec>,
+    #[serde(default)]
     pub cloths: Vec<ClothSpec>,
+    /// Garments sewn from flat patterns around the body before the run (see `crate::garment`).
+    #[serde(default)]
+    pub garments: Vec<crate::garment::GarmentSpec>,
     /// Rigid obstacles (scripted or robot-driven).
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,

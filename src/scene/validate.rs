@@ -106,8 +106,18 @@ impl Scene {
             finite3(format!("frames[{i}].linear_velocity"), f.linear_velocity)?;
             finite3(format!("frames[{i}].angular_velocity"), f.angular_velocity)?;
         }
-        if self.cloths.is_empty() {
+        if self.cloths.is_empty() && self.garments.is_empty() {
             return Err(("cloths".into(), "a scene needs at least one cloth".into()));
+        }
+        if !self.garments.is_empty() && !self.cloths.is_empty() {
+            return Err((
+                "garments".into(),
+                "a scene with garments cannot also have grid cloths".into(),
+            ));
+        }
+        for (i, g) in self.garments.iter().enumerate() {
+            crate::garment::pattern::validate(g)
+                .map_err(|e| (format!("garments[{i}]"), e.to_string()))?;
         }
         let mut total = 0usize;
         let mut cloth_names = std::collections::HashSet::new();

@@ -179,6 +179,53 @@ impl Simulation {
         self.collision = Some(stage);
     }
 
+    /// Starts a new phase with another cloth and effect set (a garment after welding): the
+    /// integrator, constraints, energy bookkeeping and the collision stage's cloth topology are
+    /// rebuilt; obstacles and frames keep their poses, the clock keeps running.
+    pub fn replace_cloth(
+        &mut self,
+        cloth: Cloth,
+        effects: EffectSet,
+    ) -> Result<(), crate::collide::StageError> {
+        if let Some(stage) = &self.collision {
+            let new = CollisionStage::new(
+                *stage.settings(),
+                stage.obstacles().to_vec(),
+                cloth.triangles.clone(),
+                cloth.len(),
+                cloth.thickness.clone(),
+                cloth.friction.clone(),
+            )?;
+            self.collision = Some(new);
+        }
+        self.integrator.prepare(&effects, cloth.len());
+        self.constraints = Constraints::free(cloth.len());
+        self.cloth = cloth;
+        self.effects = effects;
+        self.energy_cache = None;
+        self.recent_energy = [0.0; 16];
+        self.energy_budget = None;
+        self.budget_scale = 0.0;
+        Ok(())
+    }
+
+    /// Sets the clock back to zero, with scripted frames and obstacles at their t = 0 poses
+    /// (after a preparation phase such as sewing, so that scripts and robot trajectories start
+    /// with the run proper).
+    pub fn restart_clock(&mut self) {
+        self.time = 0.0;
+        for f in 0..self.frames.len() {
+            if let Some(script) = &self.frames.script[f] {
+                let p = script(0.0);
+                self.frames.start[f] = p;
+                self.frames.end[f] = p;
+            }
+        }
+        if let Some(stage) = self.collision.as_mut() {
+            stage.advance_obstacles(0.0, 0.0);
+        }
+    }
+
     pub fn collision(&self) -> Option<&CollisionStage> {
         self.collision.as_ref()
     }

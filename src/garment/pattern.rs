@@ -1,0 +1,282 @@
+//! Pattern validation: a panel outline must be a simple closed polygon (a self-intersecting cut
+//! cannot be sewn or meshed), and seams must name existing panels, valid stretches and stretches
+//! of comparable length.
+
+use super::spec::{GarmentSpec, PanelSpec, SeamSide, SeamSpec};
+use super::GarmentError;
+use glam::DVec2;
+
+/// Largest accepted relative difference of the two sides of a seam: `|La - Lb| / max(La, Lb)`.
+/// Real patterns ease a few percent; beyond this the seam would have to stretch the cloth hard.
+pub const MAX_SEAM_MISMATCH: f64 = 0.2;
+
+/// The outline as 2D points.
+pub fn outline(p: &PanelSpec) -> Vec<DVec2> {
+    p.outline.iter().map(|q| DVec2::new(q[0], q[1])).collect()
+}
+
+/// Signed area (positive for counter-clockwise).
+pub fn signed_area(pts: &[DVec2]) -> f64 {
+    let n = pts.len();
+    0.5 * (0..n)
+        .map(|i| pts[i].perp_dot(pts[(i + 1) % n]))
+        .sum::<f64>()
+}
+
+/// Proper or touching intersection of segments `ab` and `cd`.
+fn segments_intersect(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |p: DVec2, q: DVec2, r: DVec2, side: f64| {
+        side == 0.0
+            && r.x >= p.x.min(q.x)
+            && r.x <= p.x.max(q.x)
+            && r.y >= p.y.min(q.y)
+            && r.y <= p.y.max(q.y)
+    };
+    on(c, d, a, d1) || on(c, d, b, d2) || on(a, b, c, d3) || on(a, b, d, d4)
+}
+
+/// Checks one panel's outline: at least 3 finite points, no zero-length edge, no two
+/// non-adjacent edges touching, non-zero area.
+pub fn validate_outline(p: &PanelSpec) -> Result<(), GarmentError> {
+    let bad = |reason: String| GarmentError::Outline {
+        panel: p.name.clone(),
+        reason,
+    };
+    let pts = outline(p);
+    let n = pts.len();
+    if n < 3 {
+        return Err(bad(format!("needs at least 3 points, has {n}")));
+    }
+    if let Some(i) = pts.iter().position(|q| !q.is_finite()) {
+        return Err(bad(format!("point {i} is not finite")));
+    }
+    for i in 0..n {
+        if (pts[(i + 1) % n] - pts[i]).length() <= 1e-9 {
+            return Err(bad(format!("points {i} and {} coincide", (i + 1) % n)));
+        }
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            // Adjacent edges share a vertex by construction.
+            if j == i + 1 || (i == 0 && j == n - 1) {
+                continue;
+            }
+            if segments_intersect(pts[i], pts[(i + 1) % n], pts[j], pts[(j + 1) % n]) {
+                return Err(GarmentError::SelfIntersecting {
+                    panel: p.name.clone(),
+                    edge_a: i,
+                    edge_b: j,
+                });
+            }
+        }
+    }
+    if signed_area(&pts).abs() < 1e-8 {
+        return Err(bad("encloses no area".into()));
+    }
+    Ok(())
+}
+
+/// Outline edges `from, from+1, ..` (wrapping) up to vertex `to`, as edge indices.
+pub fn stretch_edges(n: usize, side: &SeamSide) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut i = side.from;
+    while i != side.to && out.len() < n {
+        out.push(i);
+        i = (i + 1) % n;
+    }
+    out
+}
+
+/// Points of a stretch along the outline, `from` first and `to` last.
+pub fn stretch_points(pts: &[DVec2], side: &SeamSide) -> Vec<DVec2> {
+    let mut out: Vec<DVec2> = stretch_edges(pts.len(), side)
+        .into_iter()
+        .map(|e| pts[e])
+        .collect();
+    out.push(pts[side.to]);
+    out
+}
+
+/// Length of a polyline.
+pub fn polyline_length(pts: &[DVec2]) -> f64 {
+    pts.windows(2).map(|w| (w[1] - w[0]).length()).sum()
+}
+
+/// Validates every panel and seam of a garment.
+pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
+    if g.panels.is_empty() {
+        return Err(GarmentError::Invalid {
+            garment: g.name.clone(),
+            reason: "has no panels".into(),
+        });
+    }
+    if !(g.edge_length.is_finite() && g.edge_length > 0.0) {
+        return Err(GarmentError::Invalid {
+            garment: g.name.clone(),
+            reason: format!("edge_length {} must be > 0", g.edge_length),
+        });
+    }
+    validate_parameters(g)?;
+    for (k, p) in g.panels.iter().enumerate() {
+        if g.panels[..k].iter().any(|q| q.name == p.name) {
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!("two panels are named '{}'", p.name),
+            });
+        }
+        validate_outline(p)?;
+        // Refinement halves triangles above the equilateral area of the target edge.
+        let triangles = 2.0 * signed_area(&outline(p)).abs()
+            / (3f64.sqrt() / 4.0 * g.edge_length * g.edge_length);
+        if triangles > MAX_TRIANGLES {
+            return Err(GarmentError::Outline {
+                panel: p.name.clone(),
+                reason: format!(
+                    "would mesh into ~{triangles:.0} triangles at edge_length {} (limit {MAX_TRIANGLES})",
+                    g.edge_length
+                ),
+            });
+        }
+        let pose = &p.placement.pose;
+        if pose.xyz.iter().chain(&pose.rpy).any(|v| !v.is_finite()) || !p.grain.is_finite() {
+            return Err(GarmentError::Outline {
+                panel: p.name.clone(),
+                reason: "has a non-finite placement pose or grain".into(),
+            });
+        }
+        if let Some(w) = &p.placement.wrap {
+            if !(w.radius.is_finite() && w.radius > 0.0) {
+                return Err(GarmentError::Outline {
+                    panel: p.name.clone(),
+                    reason: format!("wrap radius {} must be > 0", w.radius),
+                });
+            }
+        }
+    }
+    // Edges already claimed by a seam, per panel: a boundary edge is sewn at most once.
+    let mut used: Vec<Vec<Option<String>>> = g
+        .panels
+        .iter()
+        .map(|p| vec![None; p.outline.len()])
+        .collect();
+    for s in &g.seams {
+        validate_seam(g, s, &mut used)?;
+    }
+    Ok(())
+}
+
+/// Largest estimated triangle count of one panel.
+pub const MAX_TRIANGLES: f64 = 1e6;
+
+/// Material, sewing schedule and attachment values.
+fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
+    let m = &g.material;
+    let s = &g.sewing;
+    let checks: [(&str, f64, bool); 15] = [
+        ("material.density", m.density, true),
+        ("material.stretch", m.stretch, true),
+        ("material.thickness", m.thickness, true),
+        ("material.shear", m.shear, false),
+        ("material.skip_one", m.skip_one, false),
+        ("material.bend_warp", m.bend_warp, false),
+        ("material.bend_weft", m.bend_weft, false),
+        ("material.twist", m.twist, false),
+        ("material.friction", m.friction, false),
+        ("material.damping.spring", m.damping.spring, false),
+        ("material.damping.air", m.damping.air, false),
+        ("material.damping.diffusion", m.damping.diffusion, false),
+        ("sewing.stiffness", s.stiffness, true),
+        ("sewing.tolerance", s.tolerance, true),
+        ("sewing.close_time", s.close_time, false),
+    ];
+    for (key, v, strictly) in checks {
+        let ok = v.is_finite() && if strictly { v > 0.0 } else { v >= 0.0 };
+        if !ok {
+            let want = if strictly { "> 0" } else { ">= 0" };
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!("{key} = {v} must be finite and {want}"),
+            });
+        }
+    }
+    if !(s.max_time.is_finite() && s.max_time > s.close_time) {
+        return Err(GarmentError::Invalid {
+            garment: g.name.clone(),
+            reason: format!(
+                "sewing.max_time = {} must be finite and > close_time ({})",
+                s.max_time, s.close_time
+            ),
+        });
+    }
+    for (k, a) in g.attach.iter().enumerate() {
+        if !(a.radius.is_finite() && a.radius > 0.0) || a.point.iter().any(|v| !v.is_finite()) {
+            return Err(GarmentError::Invalid {
+                garment: g.name.clone(),
+                reason: format!("attach[{k}]: point must be finite and radius > 0"),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn validate_seam(
+    g: &GarmentSpec,
+    s: &SeamSpec,
+    used: &mut [Vec<Option<String>>],
+) -> Result<(), GarmentError> {
+    let mut lengths = [0.0; 2];
+    for (k, side) in [&s.a, &s.b].into_iter().enumerate() {
+        let Some(pi) = g.panels.iter().position(|p| p.name == side.panel) else {
+            return Err(GarmentError::MissingPanel {
+                seam: s.name.clone(),
+                panel: side.panel.clone(),
+            });
+        };
+        let n = g.panels[pi].outline.len();
+        for idx in [side.from, side.to] {
+            if idx >= n {
+                return Err(GarmentError::SeamIndex {
+                    seam: s.name.clone(),
+                    panel: side.panel.clone(),
+                    index: idx,
+                    len: n,
+                });
+            }
+        }
+        if side.from == side.to {
+            return Err(GarmentError::Seam {
+                seam: s.name.clone(),
+                reason: format!("stretch of panel '{}' is empty (from == to)", side.panel),
+            });
+        }
+        for e in stretch_edges(n, side) {
+            if let Some(other) = &used[pi][e] {
+                return Err(GarmentError::Seam {
+                    seam: s.name.clone(),
+                    reason: format!(
+                        "edge {e} of panel '{}' is already sewn by seam '{other}'",
+                        side.panel
+                    ),
+                });
+            }
+            used[pi][e] = Some(s.name.clone());
+        }
+        lengths[k] = polyline_length(&stretch_points(&outline(&g.panels[pi]), side));
+    }
+    let mismatch = (lengths[0] - lengths[1]).abs() / lengths[0].max(lengths[1]);
+    if mismatch > MAX_SEAM_MISMATCH {
+        return Err(GarmentError::SeamLength {
+            seam: s.name.clone(),
+            a: lengths[0],
+            b: lengths[1],
+        });
+    }
+    Ok(())
+}
