@@ -128,6 +128,11 @@ impl Features {
     pub fn is_empty(&self) -> bool {
         self.points.is_empty() && self.segments.is_empty()
     }
+
+    /// Inflation radius of the features (the rod radius; 0 for edges).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
 }
 
 /// Cylinder (axis y) features, inside the shape so cloth resting on it at its thickness is

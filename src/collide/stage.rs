@@ -106,6 +106,9 @@ pub struct CollisionReport {
     /// Cloth-cloth colliding pairs the fail-safe could not resolve (kinematic vertices involved,
     /// or the step started intersecting).
     pub unresolved: usize,
+    /// Obstacles skipped because their swept bounds are far from the cloth's (see
+    /// [`CollisionStage::set_culling`]).
+    pub culled: usize,
     /// Wall time of `resolve`.
     pub time_s: f64,
 }
@@ -145,6 +148,10 @@ pub struct CollisionStage {
     feature_collider: FeatureCollider,
     /// Per-vertex "moved by a feature contact" flags (reused).
     feature_moved: Vec<bool>,
+    /// Skip obstacles far from the cloth (on by default).
+    culling: bool,
+    /// Per obstacle: near enough to the cloth to be tested this step.
+    near: Vec<bool>,
 }
 
 impl CollisionStage {
@@ -201,7 +208,58 @@ impl CollisionStage {
             scratch: Vec::new(),
             in_contact: vec![false; n_vertices],
             self_collider,
+            culling: true,
+            near: Vec::new(),
         })
+    }
+
+    /// Turns far-obstacle culling on or off (off: every obstacle is tested every step; the
+    /// results are the same, only slower).
+    pub fn set_culling(&mut self, on: bool) {
+        self.culling = on;
+    }
+
+    /// Marks the obstacles whose swept bounds come near the cloth's swept bounds this step;
+    /// returns how many are far. The margin (three times the largest thickness plus the feature
+    /// radius) covers every test the passes make: a vertex's box is inflated by its thickness,
+    /// the obstacle's by the largest thickness, and a response moves a vertex by about one
+    /// thickness.
+    fn cull(&mut self, x0: &[Vec3], x1: &[Vec3], max_th: f64) -> usize {
+        let n_obs = self.obstacles.len();
+        self.near.clear();
+        self.near.resize(n_obs, true);
+        if !self.culling || x0.is_empty() {
+            return 0;
+        }
+        let (lo, hi) = x0
+            .par_iter()
+            .chain(x1.par_iter())
+            .with_min_len(1024)
+            .fold(
+                || (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            )
+            .reduce(
+                || (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        if !(lo.is_finite() && hi.is_finite()) {
+            return 0;
+        }
+        let mut far = 0;
+        for ((o, f), near) in self
+            .obstacles
+            .iter()
+            .zip(&self.features)
+            .zip(self.near.iter_mut())
+        {
+            let (olo, ohi) = o.swept_aabb(3.0 * max_th + f.radius());
+            if lo.cmpgt(ohi).any() || hi.cmplt(olo).any() {
+                *near = false;
+                far += 1;
+            }
+        }
+        far
     }
 
     pub fn settings(&self) -> &CollisionSettings {
@@ -258,6 +316,9 @@ impl CollisionStage {
         let response = self.settings.response;
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         for (oi, o) in self.obstacles.iter().enumerate() {
+            if !self.near.get(oi).copied().unwrap_or(true) {
+                continue;
+            }
             let (olo, ohi) = o.swept_aabb(max_th);
             self.scratch.clear();
             self.scratch.resize(n, None);
@@ -318,9 +379,14 @@ impl CollisionStage {
         self.in_contact.clear();
         self.in_contact.resize(self.n_vertices, false);
         let mode = self.settings.mode;
+        let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
+        let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
 
-        let mut report = CollisionReport::default();
+        let mut report = CollisionReport {
+            culled,
+            ..Default::default()
+        };
         // Obstacle edges and thin parts that pass between cloth vertices.
         let state = ClothState {
             x0: &x0[..n],
@@ -333,7 +399,13 @@ impl CollisionStage {
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
         moved.resize(n, false);
-        for (o, f) in self.obstacles.iter().zip(&self.features) {
+        for ((o, f), _) in self
+            .obstacles
+            .iter()
+            .zip(&self.features)
+            .zip(&self.near)
+            .filter(|(_, near)| **near)
+        {
             report.feature_contacts +=
                 self.feature_collider
                     .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);

@@ -50,6 +50,8 @@ pub struct StepMetrics {
     /// Cloth-cloth pairs the collision fail-safe could not resolve.
     pub unresolved_contacts: usize,
     pub collision_time_s: f64,
+    /// Obstacles skipped by the collision stage as far from the cloth (last substep).
+    pub culled_obstacles: usize,
 }
 
 /// Moving frames that kinematic vertices attach to. A frame step moves each frame from `start`
@@ -186,6 +188,11 @@ impl Simulation {
 
     pub fn collision(&self) -> Option<&CollisionStage> {
         self.collision.as_ref()
+    }
+
+    /// The collision stage, to change its settings at runtime (e.g. culling).
+    pub fn collision_mut(&mut self) -> Option<&mut CollisionStage> {
+        self.collision.as_mut()
     }
 
     /// Sets where an externally driven obstacle will be at the end of the next frame step; the
@@ -447,6 +454,7 @@ impl Simulation {
             };
             m.unresolved_contacts += r.unresolved;
             m.collision_time_s += r.time_s;
+            m.culled_obstacles = r.culled;
             // A moving obstacle can push energy into the cloth: widen the guard's budget by it.
             let after = self.energies();
             if let (Some(b), Some(budget)) = (before, self.energy_budget.as_mut()) {
