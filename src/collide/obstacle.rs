@@ -334,7 +334,7 @@ impl Obstacle {
             }
             Geom::Solid | Geom::Surface => {
                 let proj = self.shape.project_local_point(p.as_vec3(), false);
-                self.from_projection(p, hint, proj)
+                self.surface_point(p, hint, proj)
             }
         }
     }
@@ -353,7 +353,7 @@ impl Obstacle {
             let proj = self
                 .shape
                 .project_local_point_with_max_dist(p.as_vec3(), false, bound)?;
-            let sp = self.from_projection(p, hint, proj);
+            let sp = self.surface_point(p, hint, proj);
             return (sp.signed_distance <= max_dist).then_some(sp);
         }
         let sp = self.closest_local(p, hint);
@@ -361,7 +361,7 @@ impl Obstacle {
     }
 
     /// Surface point of a mesh or convex solid from parry's projection of local point `p`.
-    fn from_projection(&self, p: Vec3, hint: Vec3, proj: PointProjection) -> SurfacePoint {
+    fn surface_point(&self, p: Vec3, hint: Vec3, proj: PointProjection) -> SurfacePoint {
         let q = proj.point.as_dvec3();
         let diff = p - q;
         let d = diff.length();
