@@ -324,7 +324,7 @@ impl CollisionStage {
         let mode = self.settings.mode;
         let response = self.settings.response;
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
-        // Swept vertex boxes hashed once, so each obstacle only visits the vertices near it.
+        // Swept vertex boxes, computed once per pass for every obstacle.
         let thickness = &self.thickness;
         self.vertex_boxes.clear();
         self.vertex_boxes
