@@ -296,3 +296,43 @@ fn runtime_release_sets_velocity_and_widens_the_energy_budget() {
     }
     assert!(sim.cloth.x.iter().all(|x| x.is_finite()));
 }
+
+/// The pick-towel scene with `edit` applied, written next to a copy that points at the bundled
+/// URDF by absolute path; returns the build error's message.
+fn build_error(edit: impl Fn(String) -> String) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("config/robot_pick_towel.yaml")).unwrap();
+    let urdf = root().join("urdf/drape_bot.urdf");
+    let text = edit(text.replace("../urdf/drape_bot.urdf", &urdf.display().to_string()));
+    let path = dir.path().join("scene.yaml");
+    std::fs::write(&path, text).unwrap();
+    match Scene::load(&path).and_then(|s| s.build_with_robot().map(|_| ())) {
+        Ok(()) => panic!("the edited scene built"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_grasp_rules_name_their_key() {
+    let msg = build_error(|t| t.replace("fingers: [right_finger_a_joint]", "fingers: [finger_x]"));
+    assert!(
+        msg.contains("robot.grasps[0].fingers[0]") && msg.contains("finger_x"),
+        "{msg}"
+    );
+    let msg = build_error(|t| t.replace("link: right_palm", "link: palm"));
+    assert!(
+        msg.contains("robot.grasps[0].link") && msg.contains("palm"),
+        "{msg}"
+    );
+    let msg = build_error(|t| t.replace("open_above: 0.02", "open_above: 0.01"));
+    assert!(msg.contains("robot.grasps[0].close_below"), "{msg}");
+    let msg = build_error(|t| t.replace("half_extents: [0.012,", "half_extents: [0.0,"));
+    assert!(msg.contains("robot.grasps[0].pads"), "{msg}");
+    let msg = build_error(|t| t.replace("      cloth: towel", "      cloth: rug"));
+    assert!(
+        msg.contains("robot.grasps[0].cloth") && msg.contains("rug"),
+        "{msg}"
+    );
+    let msg = build_error(|t| t.replace("close_below: 0.012", "close_below: 0.012, squeeze: 1"));
+    assert!(msg.contains("squeeze"), "{msg}");
+}
