@@ -62,7 +62,7 @@ fn urdf_string_with_trailing_nul_loads() {
     let xml = std::fs::read_to_string(bundled()).unwrap() + "\0\0";
     let dir = bundled().parent().unwrap().to_path_buf();
     let robot = Robot::from_urdf_str(&xml, Some(&dir), &no_env()).unwrap();
-    assert_eq!(robot.link_names().len(), 15);
+    assert_eq!(robot.link_names().len(), 16);
 }
 
 #[test]

@@ -149,6 +149,18 @@ impl Cloth {
         self.kinematic.retain(|(i, _)| *i != vertex);
     }
 
+    /// How a vertex is held, if it is.
+    pub fn kinematic_of(&self, vertex: u32) -> Option<Kinematic> {
+        self.kinematic
+            .iter()
+            .find(|(i, _)| *i == vertex)
+            .map(|(_, k)| *k)
+    }
+
+    pub fn is_kinematic(&self, vertex: u32) -> bool {
+        self.kinematic_of(vertex).is_some()
+    }
+
     /// Inverse masses with kinematic vertices at zero (infinite mass).
     pub fn inverse_masses(&self) -> Vec<f64> {
         let mut inv: Vec<f64> = self.mass.iter().map(|m| 1.0 / m).collect();

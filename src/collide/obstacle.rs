@@ -11,7 +11,7 @@
 
 use super::motion::Motion;
 use crate::{Pose, Vec3};
-use parry3d::query::Ray;
+use parry3d::query::{PointProjection, Ray};
 use parry3d::shape::{SharedShape, TriMesh, TriMeshFlags};
 
 #[derive(Debug, thiserror::Error)]
@@ -334,26 +334,52 @@ impl Obstacle {
             }
             Geom::Solid | Geom::Surface => {
                 let proj = self.shape.project_local_point(p.as_vec3(), false);
-                let q = proj.point.as_dvec3();
-                let diff = p - q;
-                let d = diff.length();
-                let inside = proj.is_inside && matches!(self.geom, Geom::Solid);
-                let scale = (self.local_max - self.local_min).max_element();
-                let n = if d > 1e-6 * scale {
-                    if inside {
-                        -diff / d
-                    } else {
-                        diff / d
-                    }
-                } else {
-                    self.feature_normal(p, hint)
-                };
-                SurfacePoint {
-                    point: q,
-                    normal: n,
-                    signed_distance: if inside { -d } else { d },
-                }
+                self.surface_point(p, hint, proj)
             }
+        }
+    }
+
+    /// [`Obstacle::closest_local`] when the surface is within `max_dist` of `p`, else `None`.
+    /// Meshes prune their BVH with the bound, which makes the common "no contact" answer cheap.
+    pub(crate) fn closest_local_within(
+        &self,
+        p: Vec3,
+        hint: Vec3,
+        max_dist: f64,
+    ) -> Option<SurfacePoint> {
+        if matches!(self.geom, Geom::Surface) {
+            // f32 slack so the pruning never drops what the f64 test below would keep.
+            let bound = (max_dist * (1.0 + 1e-4) + 1e-6) as f32;
+            let proj = self
+                .shape
+                .project_local_point_with_max_dist(p.as_vec3(), false, bound)?;
+            let sp = self.surface_point(p, hint, proj);
+            return (sp.signed_distance <= max_dist).then_some(sp);
+        }
+        let sp = self.closest_local(p, hint);
+        (sp.signed_distance <= max_dist).then_some(sp)
+    }
+
+    /// Surface point of a mesh or convex solid from parry's projection of local point `p`.
+    fn surface_point(&self, p: Vec3, hint: Vec3, proj: PointProjection) -> SurfacePoint {
+        let q = proj.point.as_dvec3();
+        let diff = p - q;
+        let d = diff.length();
+        let inside = proj.is_inside && matches!(self.geom, Geom::Solid);
+        let scale = (self.local_max - self.local_min).max_element();
+        let n = if d > 1e-6 * scale {
+            if inside {
+                -diff / d
+            } else {
+                diff / d
+            }
+        } else {
+            self.feature_normal(p, hint)
+        };
+        SurfacePoint {
+            point: q,
+            normal: n,
+            signed_distance: if inside { -d } else { d },
         }
     }
 

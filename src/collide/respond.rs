@@ -48,10 +48,11 @@ pub(crate) fn obstacle_vertex(
         }
     }
     // Discrete proximity at the end (also catches starts inside and curved faces after a hit).
-    let sp = o.closest_local(p, a);
-    if sp.signed_distance < th {
-        p += sp.normal * (th - sp.signed_distance);
-        contact = Some((sp.point, sp.normal));
+    if let Some(sp) = o.closest_local_within(p, a, th) {
+        if sp.signed_distance < th {
+            p += sp.normal * (th - sp.signed_distance);
+            contact = Some((sp.point, sp.normal));
+        }
     }
     let (q, n_local) = contact?;
 

@@ -1,6 +1,7 @@
 //! The collision stage of a simulation step: takes the integrator's candidate end-of-step
 //! positions/velocities and fixes them against obstacles and (optionally) the cloth itself.
 
+use super::broad::Aabb;
 use super::features::{ClothState, FeatureCollider, Features};
 use super::obstacle::Obstacle;
 use super::respond::{obstacle_vertex, VertexInput};
@@ -106,6 +107,9 @@ pub struct CollisionReport {
     /// Cloth-cloth colliding pairs the fail-safe could not resolve (kinematic vertices involved,
     /// or the step started intersecting).
     pub unresolved: usize,
+    /// Obstacles skipped because their swept bounds are far from the cloth's (see
+    /// [`CollisionStage::set_culling`]).
+    pub culled: usize,
     /// Wall time of `resolve`.
     pub time_s: f64,
 }
@@ -135,8 +139,13 @@ pub struct CollisionStage {
     thickness: Vec<f64>,
     friction: Vec<f64>,
     contacts: Vec<Contact>,
-    /// Per-vertex scratch for one obstacle's results (reused across steps).
-    scratch: Vec<Option<Contact>>,
+    /// One obstacle's answers: contact, new position and velocity (reused across steps).
+    scratch: Vec<(Contact, Vec3, Vec3)>,
+    /// Swept vertex boxes of the current pass, the tested vertices by box low x, and one
+    /// obstacle's candidates.
+    vertex_boxes: Vec<Aabb>,
+    order: Vec<u32>,
+    candidates: Vec<usize>,
     /// Per-vertex "touches an obstacle" flags, for cloth-cloth mass weighting.
     in_contact: Vec<bool>,
     self_collider: Option<SelfCollider>,
@@ -145,6 +154,10 @@ pub struct CollisionStage {
     feature_collider: FeatureCollider,
     /// Per-vertex "moved by a feature contact" flags (reused).
     feature_moved: Vec<bool>,
+    /// Skip obstacles far from the cloth (on by default).
+    culling: bool,
+    /// Per obstacle: near enough to the cloth to be tested this step.
+    near: Vec<bool>,
 }
 
 impl CollisionStage {
@@ -199,9 +212,63 @@ impl CollisionStage {
             friction,
             contacts: Vec::new(),
             scratch: Vec::new(),
+            vertex_boxes: Vec::new(),
+            order: Vec::new(),
+            candidates: Vec::new(),
             in_contact: vec![false; n_vertices],
             self_collider,
+            culling: true,
+            near: Vec::new(),
         })
+    }
+
+    /// Turns far-obstacle culling on or off (off: every obstacle is tested every step; the
+    /// results are the same, only slower).
+    pub fn set_culling(&mut self, on: bool) {
+        self.culling = on;
+    }
+
+    /// Marks the obstacles whose swept bounds come near the cloth's swept bounds this step;
+    /// returns how many are far. The margin (three times the largest thickness plus the feature
+    /// radius) covers every test the passes make: a vertex's box is inflated by its thickness,
+    /// the obstacle's by the largest thickness, and a response moves a vertex by about one
+    /// thickness.
+    fn cull(&mut self, x0: &[Vec3], x1: &[Vec3], max_th: f64) -> usize {
+        let n_obs = self.obstacles.len();
+        self.near.clear();
+        self.near.resize(n_obs, true);
+        if !self.culling || x0.is_empty() {
+            return 0;
+        }
+        let (lo, hi) = x0
+            .par_iter()
+            .chain(x1.par_iter())
+            .with_min_len(1024)
+            .fold(
+                || (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            )
+            .reduce(
+                || (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        if !(lo.is_finite() && hi.is_finite()) {
+            return 0;
+        }
+        let mut far = 0;
+        for ((o, f), near) in self
+            .obstacles
+            .iter()
+            .zip(&self.features)
+            .zip(self.near.iter_mut())
+        {
+            let (olo, ohi) = o.swept_aabb(3.0 * max_th + f.radius());
+            if lo.cmpgt(ohi).any() || hi.cmplt(olo).any() {
+                *near = false;
+                far += 1;
+            }
+        }
+        far
     }
 
     pub fn settings(&self) -> &CollisionSettings {
@@ -257,42 +324,87 @@ impl CollisionStage {
         let mode = self.settings.mode;
         let response = self.settings.response;
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
+        // Swept vertex boxes, computed once per pass for every obstacle.
+        let thickness = &self.thickness;
+        self.vertex_boxes.clear();
+        self.vertex_boxes
+            .par_extend((0..n).into_par_iter().with_min_len(1024).map(|i| {
+                if inv_mass[i] <= 0.0 || only.is_some_and(|m| !m[i]) {
+                    return Aabb::EMPTY;
+                }
+                let th = Vec3::splat(thickness[i]);
+                Aabb {
+                    lo: x0[i].min(x1[i]) - th,
+                    hi: x0[i].max(x1[i]) + th,
+                }
+            }));
+        // Tested vertices sorted by the low x of their box: an obstacle visits only the run
+        // whose x range can meet its own (the cloth is a sheet, so a 1-D sweep prunes well).
+        let boxes = &self.vertex_boxes;
+        self.order.clear();
+        self.order.extend(
+            (0..n as u32).filter(|&i| boxes[i as usize].lo.cmple(boxes[i as usize].hi).all()),
+        );
+        self.order
+            .sort_unstable_by(|&a, &b| boxes[a as usize].lo.x.total_cmp(&boxes[b as usize].lo.x));
+        let widest = self
+            .order
+            .iter()
+            .map(|&i| boxes[i as usize].hi.x - boxes[i as usize].lo.x)
+            .fold(0.0, f64::max);
         for (oi, o) in self.obstacles.iter().enumerate() {
+            if !self.near.get(oi).copied().unwrap_or(true) {
+                continue;
+            }
             let (olo, ohi) = o.swept_aabb(max_th);
-            self.scratch.clear();
-            self.scratch.resize(n, None);
-            let thickness = &self.thickness;
+            let ob = Aabb { lo: olo, hi: ohi };
             let friction = &self.friction;
-            self.scratch
-                .par_iter_mut()
-                .zip(x1[..n].par_iter_mut())
-                .zip(v1[..n].par_iter_mut())
-                .enumerate()
-                .with_min_len(256)
-                .for_each(|(i, ((out, x), v))| {
-                    if inv_mass[i] <= 0.0 || only.is_some_and(|m| !m[i]) {
-                        return;
-                    }
-                    let th = thickness[i];
-                    let lo = x0[i].min(*x) - Vec3::splat(th);
-                    let hi = x0[i].max(*x) + Vec3::splat(th);
-                    if lo.cmpgt(ohi).any() || hi.cmplt(olo).any() {
-                        return;
-                    }
-                    let input = VertexInput {
-                        vertex: i as u32,
-                        x0: x0[i],
-                        thickness: th,
-                        friction: o.friction.unwrap_or(friction[i]),
-                        h,
-                        mode,
-                        response,
-                    };
-                    *out = obstacle_vertex(o, oi, &input, x, v);
-                });
-            for c in self.scratch.iter().flatten() {
-                self.in_contact[c.vertex as usize] = true;
-                self.contacts.push(*c);
+            let boxes = &self.vertex_boxes;
+            // Skipped vertices carry the empty box, which an unbounded box would still "overlap".
+            let meets = |i: usize| boxes[i].lo.cmple(boxes[i].hi).all() && boxes[i].overlaps(&ob);
+            self.candidates.clear();
+            let order = &self.order;
+            let first = order.partition_point(|&i| boxes[i as usize].lo.x < ob.lo.x - widest);
+            let last = order.partition_point(|&i| boxes[i as usize].lo.x <= ob.hi.x);
+            self.candidates.extend(
+                order[first..last.max(first)]
+                    .iter()
+                    .map(|&i| i as usize)
+                    .filter(|&i| meets(i)),
+            );
+            self.candidates.sort_unstable();
+            self.candidates.dedup();
+            // Their answers computed in parallel on copies and written back (vertices are
+            // independent within one obstacle), in vertex order.
+            let x1r: &[Vec3] = x1;
+            let v1r: &[Vec3] = v1;
+            self.scratch.clear();
+            self.scratch.par_extend(
+                self.candidates
+                    .par_iter()
+                    .copied()
+                    .with_min_len(32)
+                    .filter_map(|i| {
+                        let input = VertexInput {
+                            vertex: i as u32,
+                            x0: x0[i],
+                            thickness: thickness[i],
+                            friction: o.friction.unwrap_or(friction[i]),
+                            h,
+                            mode,
+                            response,
+                        };
+                        let (mut x, mut v) = (x1r[i], v1r[i]);
+                        let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
+                        Some((c, x, v))
+                    }),
+            );
+            for &(c, x, v) in &self.scratch {
+                let i = c.vertex as usize;
+                x1[i] = x;
+                v1[i] = v;
+                self.in_contact[i] = true;
+                self.contacts.push(c);
             }
         }
     }
@@ -318,9 +430,14 @@ impl CollisionStage {
         self.in_contact.clear();
         self.in_contact.resize(self.n_vertices, false);
         let mode = self.settings.mode;
+        let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
+        let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
 
-        let mut report = CollisionReport::default();
+        let mut report = CollisionReport {
+            culled,
+            ..Default::default()
+        };
         // Obstacle edges and thin parts that pass between cloth vertices.
         let state = ClothState {
             x0: &x0[..n],
@@ -333,7 +450,13 @@ impl CollisionStage {
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
         moved.resize(n, false);
-        for (o, f) in self.obstacles.iter().zip(&self.features) {
+        for ((o, f), _) in self
+            .obstacles
+            .iter()
+            .zip(&self.features)
+            .zip(&self.near)
+            .filter(|(_, near)| **near)
+        {
             report.feature_contacts +=
                 self.feature_collider
                     .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
@@ -375,8 +498,10 @@ impl CollisionStage {
             let i = c.vertex as usize;
             let local = o.pose.inverse_transform_point(x1[i]);
             let hint = o.pose_prev.inverse_transform_point(x0[i]);
-            let sp = o.closest_local(local, hint);
-            deepest = deepest.max(self.thickness[i] - sp.signed_distance);
+            // Only penetrations count: a surface farther than the thickness adds nothing.
+            if let Some(sp) = o.closest_local_within(local, hint, self.thickness[i]) {
+                deepest = deepest.max(self.thickness[i] - sp.signed_distance);
+            }
         }
         report.contacts = self.contacts.len();
         report.deepest_penetration = deepest.max(0.0);

@@ -2,10 +2,11 @@
 //! frame's end time, runs FK, and hands the link poses to the collision obstacles and attachment
 //! frames built from the robot, so the simulation moves them smoothly over the substeps.
 
+use super::grasp::{Grasp, GraspEvent};
 use super::{Geometry, JointInput, JointPositions, JointTrajectory, Robot};
 use crate::collide::{Motion, Obstacle, ObstacleError};
 use crate::sim::Simulation;
-use crate::Pose;
+use crate::{Pose, Vec3};
 use glam::DQuat;
 
 /// Where joint positions come from.
@@ -40,6 +41,7 @@ pub struct RobotDriver {
     poses: Vec<Pose>,
     time: f64,
     clamp_warned: Vec<bool>,
+    grasps: Vec<Grasp>,
 }
 
 /// URDF cylinders and capsules run along local z, parry's along y: a quarter turn about x maps
@@ -108,6 +110,7 @@ impl RobotDriver {
             poses: Vec::with_capacity(n_links),
             time: 0.0,
             clamp_warned: vec![false; n_joints],
+            grasps: Vec::new(),
         };
         d.update(0.0);
         d
@@ -193,9 +196,71 @@ impl RobotDriver {
         }
     }
 
-    /// Poses the robot for the end of the next frame (`t_next`) and tells the simulation where
-    /// its obstacles and frames will be; call before [`Simulation::step`].
+    /// Adds a grasp rule (its link should have a bound frame, see [`RobotDriver::bind_frame`]).
+    pub fn add_grasp(&mut self, grasp: Grasp) {
+        self.grasps.push(grasp);
+    }
+
+    pub fn grasps(&self) -> &[Grasp] {
+        &self.grasps
+    }
+
+    /// World velocity at time `t` of the material point of `link` that is at world position `p`
+    /// at the current time (central difference of FK over +-0.1 ms: exact for joint motion that
+    /// is linear in time, the mean of both sides at a trajectory waypoint).
+    pub fn link_point_velocity(&self, link: usize, p: Vec3, t: f64) -> Vec3 {
+        const DT: f64 = 1e-4;
+        let local = self.poses[link].inverse_transform_point(p);
+        let pose = |t: f64| self.robot.link_poses(&self.positions_at(t))[link];
+        (pose(t + DT).transform_point(local) - pose(t - DT).transform_point(local)) / (2.0 * DT)
+    }
+
+    /// Runs the grasp rules on the current joint state: closing fingers attach the free cloth
+    /// vertices between their pads, opening fingers release them with the gripper's velocity.
+    fn apply_grasps(&mut self, sim: &mut Simulation) {
+        for k in 0..self.grasps.len() {
+            let opening = self.grasps[k].opening(self.robot.kinematics(), &self.q);
+            let link = self.grasps[k].link;
+            let name = &self.robot.link_names()[link];
+            match self.grasps[k].update(opening) {
+                Some(GraspEvent::Close) => {
+                    let g = &self.grasps[k];
+                    let picked = g.between_pads(&sim.cloth.x, &self.poses[link], |v| {
+                        sim.cloth.is_kinematic(v)
+                    });
+                    let held = sim.attach_vertices(&picked, g.frame);
+                    log::info!(
+                        "t = {:.3} s: `{name}` grasps {} cloth vertices",
+                        self.time,
+                        held.len()
+                    );
+                    self.grasps[k].set_held(held);
+                }
+                Some(GraspEvent::Open) => {
+                    let held = self.grasps[k].take_held();
+                    let released: Vec<(u32, Vec3)> = held
+                        .iter()
+                        .map(|&v| {
+                            let p = sim.cloth.x[v as usize];
+                            (v, self.link_point_velocity(link, p, self.time))
+                        })
+                        .collect();
+                    let n = sim.release_vertices(&released);
+                    log::info!(
+                        "t = {:.3} s: `{name}` releases {n} cloth vertices",
+                        self.time
+                    );
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// Runs the grasp rules on the current state, then poses the robot for the end of the next
+    /// frame (`t_next`) and tells the simulation where its obstacles and frames will be; call
+    /// before [`Simulation::step`].
     pub fn advance(&mut self, sim: &mut Simulation, t_next: f64) {
+        self.apply_grasps(sim);
         self.update(t_next);
         for (link, b) in self.bindings.iter().enumerate() {
             let pose = self.poses[link];

@@ -2,12 +2,14 @@
 //! geometry for the collision stage.
 
 pub mod driver;
+pub mod grasp;
 pub mod joint_input;
 pub mod kinematics;
 pub mod resolve;
 pub mod urdf;
 
 pub use driver::{joint_stream, JointSource, RobotDriver};
+pub use grasp::{Grasp, GraspError, GraspEvent, Hysteresis, PadBox};
 pub use joint_input::{
     apply_free_poses, JointInput, JointInputError, JointTrajectory, TrajectoryError,
     TrajectoryPoint,

@@ -10,10 +10,11 @@ use crate::effects::{
 use crate::integrate::ImplicitSettings;
 use crate::robot::driver::link_obstacles;
 use crate::robot::{
-    JointInputError, JointSource, JointTrajectory, Robot, RobotDriver, TrajectoryError, UrdfOptions,
+    Grasp, Hysteresis, JointInputError, JointSource, JointTrajectory, PadBox, Robot, RobotDriver,
+    TrajectoryError, UrdfOptions,
 };
 use crate::sim::{Frames, Simulation, StepSettings};
-use crate::Vec3;
+use crate::{Pose, Vec3};
 
 /// Global vertex indices a (validated) selection picks in a piece.
 pub fn select(piece: &Piece, s: &Selection) -> Vec<u32> {
@@ -93,6 +94,10 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         {
             log::warn!("cloth '{}': a pin or attachment selects no vertex", c.name);
         }
+    }
+
+    if let (Some(r), Some(d)) = (&scene.robot, driver.as_mut()) {
+        add_grasps(scene, r, d, &cloth, &mut frames)?;
     }
 
     let effects = build_effects(scene, &cloth);
@@ -245,6 +250,68 @@ fn attach_to_links(
         for v in picked {
             cloth.attach(v, frame, &pose);
         }
+    }
+    Ok(())
+}
+
+/// Builds the grasp rules (one frame per gripper link, shared with attachments).
+fn add_grasps(
+    scene: &Scene,
+    r: &RobotSpec,
+    driver: &mut RobotDriver,
+    cloth: &Cloth,
+    frames: &mut Frames,
+) -> Result<(), SceneError> {
+    for (k, g) in r.grasps.iter().enumerate() {
+        let key = |field: &str| format!("robot.grasps[{k}].{field}");
+        let link = driver.robot().link_index(&g.link).ok_or_else(|| {
+            invalid(
+                scene,
+                key("link"),
+                format!("the robot has no link named '{}'", g.link),
+            )
+        })?;
+        let mut fingers = Vec::with_capacity(g.fingers.len());
+        for (f, name) in g.fingers.iter().enumerate() {
+            let j = driver.robot().joint_index(name).ok_or_else(|| {
+                invalid(
+                    scene,
+                    key(&format!("fingers[{f}]")),
+                    format!("the robot has no joint named '{name}'"),
+                )
+            })?;
+            fingers.push(j);
+        }
+        let candidates = match &g.cloth {
+            Some(name) => cloth
+                .pieces
+                .iter()
+                .find(|p| &p.name == name)
+                .map(|p| p.vertices())
+                .ok_or_else(|| invalid(scene, key("cloth"), format!("no cloth named '{name}'")))?,
+            None => 0..cloth.len(),
+        };
+        let state = Hysteresis::new(g.close_below, g.open_above)
+            .map_err(|e| invalid(scene, key("close_below"), e.to_string()))?;
+        let pads = PadBox::new(
+            Pose::from_xyz_rpy(g.pads.xyz, g.pads.rpy),
+            Vec3::from(g.pads.half_extents),
+        )
+        .map_err(|e| invalid(scene, key("pads"), e.to_string()))?;
+        if !(g.pads.xyz.iter().chain(&g.pads.rpy).all(|v| v.is_finite())) {
+            return Err(invalid(scene, key("pads"), "pose must be finite".into()));
+        }
+        let frame = match driver.frame_of(link) {
+            Some(f) => f,
+            None => {
+                let f = frames.add(&format!("robot:{}", g.link), driver.link_poses()[link]);
+                driver.bind_frame(link, f);
+                f
+            }
+        };
+        let grasp = Grasp::new(link, frame, fingers, state, pads, candidates)
+            .map_err(|e| invalid(scene, key("fingers"), e.to_string()))?;
+        driver.add_grasp(grasp);
     }
     Ok(())
 }

@@ -273,6 +273,37 @@ pub struct RobotSpec {
     pub visual_fallback: bool,
     #[serde(default)]
     pub attach: Vec<RobotAttachSpec>,
+    /// Grasp rules: cloth between a gripper's pads is held while its fingers are closed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grasps: Vec<RobotGraspSpec>,
+}
+
+/// `{ link: right_palm, fingers: [right_finger_a_joint], close_below: 0.012, open_above: 0.02,
+/// pads: { xyz: [0, 0, -0.13], half_extents: [0.012, 0.03, 0.015] } }`: when the largest finger
+/// joint position drops below `close_below`, the free vertices of `cloth` (all cloths if
+/// omitted) inside the pad box (link frame) are attached to `link`; above `open_above` they are
+/// released with the link's velocity.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotGraspSpec {
+    pub link: String,
+    pub fingers: Vec<String>,
+    pub close_below: f64,
+    pub open_above: f64,
+    pub pads: PadSpec,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cloth: Option<String>,
+}
+
+/// A box in a link frame: centre pose and half extents (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PadSpec {
+    #[serde(default)]
+    pub xyz: [f64; 3],
+    #[serde(default)]
+    pub rpy: [f64; 3],
+    pub half_extents: [f64; 3],
 }
 
 /// Cloth vertices held by a link, keeping their offset: `{ cloth: towel, link: hand,

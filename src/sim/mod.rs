@@ -50,6 +50,8 @@ pub struct StepMetrics {
     /// Cloth-cloth pairs the collision fail-safe could not resolve.
     pub unresolved_contacts: usize,
     pub collision_time_s: f64,
+    /// Obstacles skipped by the collision stage as far from the cloth (last substep).
+    pub culled_obstacles: usize,
 }
 
 /// Moving frames that kinematic vertices attach to. A frame step moves each frame from `start`
@@ -104,6 +106,11 @@ impl Frames {
     /// Current (end-of-step) pose.
     pub fn pose(&self, frame: usize) -> Pose {
         self.end[frame]
+    }
+
+    /// Pose at the simulation's current time, even after a target for the next step was set.
+    pub fn pose_now(&self, frame: usize) -> Pose {
+        self.start[frame]
     }
 }
 
@@ -230,6 +237,11 @@ impl Simulation {
         self.collision.as_ref()
     }
 
+    /// The collision stage, to change its settings at runtime (e.g. culling).
+    pub fn collision_mut(&mut self) -> Option<&mut CollisionStage> {
+        self.collision.as_mut()
+    }
+
     /// Sets where an externally driven obstacle will be at the end of the next frame step; the
     /// substeps see it move smoothly from its current pose. Returns false for a bad index or pose.
     pub fn set_obstacle_target(&mut self, obstacle: usize, pose: Pose) -> bool {
@@ -268,6 +280,55 @@ impl Simulation {
     /// Sets where a frame will be at the end of the next frame step.
     pub fn set_frame_target(&mut self, frame: usize, pose: Pose) {
         self.frames.end[frame] = pose;
+    }
+
+    /// Attaches cloth vertices at runtime to `frame` at its current pose, keeping their offsets
+    /// (a gripper closing on cloth). Vertices that are already kinematic, or out of range, are
+    /// skipped; returns the ones attached. From the next substep on they are fixed in the
+    /// solver's filter and have infinite mass in the collision stage; their kinetic energy
+    /// leaves the guard's accounting (the budget stays an upper bound).
+    pub fn attach_vertices(&mut self, vertices: &[u32], frame: usize) -> Vec<u32> {
+        if frame >= self.frames.len() {
+            return Vec::new();
+        }
+        let pose = self.frames.pose_now(frame);
+        let mut done = Vec::with_capacity(vertices.len());
+        for &v in vertices {
+            if (v as usize) < self.cloth.len() && !self.cloth.is_kinematic(v) {
+                self.cloth.attach(v, frame, &pose);
+                done.push(v);
+            }
+        }
+        if !done.is_empty() {
+            self.energy_cache = None;
+        }
+        done
+    }
+
+    /// Releases kinematic vertices at runtime with the given velocities (a gripper opening:
+    /// the gripper's point velocity). Their kinetic energy is energy given to the cloth from
+    /// outside, so it widens the guard's energy budget. Returns how many were released.
+    pub fn release_vertices(&mut self, released: &[(u32, Vec3)]) -> usize {
+        let mut count = 0;
+        let mut gained = 0.0;
+        for &(v, vel) in released {
+            let i = v as usize;
+            if i >= self.cloth.len() || !self.cloth.is_kinematic(v) || !vel.is_finite() {
+                continue;
+            }
+            self.cloth.release(v);
+            self.cloth.v[i] = vel;
+            gained += 0.5 * self.cloth.mass[i] * vel.length_squared();
+            count += 1;
+        }
+        if count > 0 {
+            if let Some(b) = self.energy_budget.as_mut() {
+                *b += gained;
+            }
+            self.budget_scale += gained;
+            self.energy_cache = None;
+        }
+        count
     }
 
     /// Kinetic energy of free vertices and potential energy of every conservative effect.
@@ -440,6 +501,7 @@ impl Simulation {
             };
             m.unresolved_contacts += r.unresolved;
             m.collision_time_s += r.time_s;
+            m.culled_obstacles = r.culled;
             // A moving obstacle can push energy into the cloth: widen the guard's budget by it.
             let after = self.energies();
             if let (Some(b), Some(budget)) = (before, self.energy_budget.as_mut()) {
