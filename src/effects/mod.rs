@@ -18,6 +18,7 @@ pub use wind::{Gust, Wind, WindKey};
 
 use crate::integrate::{BlockCsr, PatternBuilder};
 use crate::Vec3;
+use std::sync::Mutex;
 
 /// The state an effect is evaluated at.
 #[derive(Clone, Copy)]
@@ -57,6 +58,19 @@ pub trait Effect: Send + Sync {
         0.0
     }
 
+    /// True when the force depends on positions only (not on velocity or time): such forces
+    /// computed alongside the energy at `x` serve the next force evaluation at the same `x`.
+    fn position_only(&self) -> bool {
+        false
+    }
+
+    /// Adds the forces at `s` to `f` and returns the energy at `s.x`. Elastic effects override
+    /// this with one fused pass (the guard needs the energy of every substep's result).
+    fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
+        self.add_forces(s, f);
+        self.energy(s.x)
+    }
+
     /// True for effects that can add energy from outside the cloth (wind); the divergence guard
     /// accounts for their work so that a gust is not mistaken for an instability.
     fn injects_energy(&self) -> bool {
@@ -75,6 +89,20 @@ pub struct EffectSet {
     effects: Vec<Box<dyn Effect>>,
     evaluations: Vec<std::sync::atomic::AtomicU64>,
     gravity: Vec3,
+    cache: Mutex<PositionForces>,
+}
+
+/// Sum of the position-only forces at the configuration `x` of the last energy evaluation.
+///
+/// The divergence guard evaluates the energy of every substep's result `x_{n+1}`; doing so in the
+/// same pass as the forces and keeping those forces means the next substep, which starts from
+/// `x_{n+1}`, does not evaluate them again. The cache is used only when the positions are
+/// bitwise identical, so it never changes a result.
+#[derive(Default)]
+struct PositionForces {
+    x: Vec<Vec3>,
+    f: Vec<Vec3>,
+    valid: bool,
 }
 
 impl EffectSet {
@@ -120,10 +148,24 @@ impl EffectSet {
         }
     }
 
-    /// Sum of all forces at `s` (overwrites `f`).
+    /// Sum of all forces at `s` (overwrites `f`). Position-only forces come from the cache when
+    /// the last energy evaluation was at exactly these positions.
     pub fn forces(&self, s: &State, f: &mut [Vec3]) {
-        f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let cached = {
+            let cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+            let hit = cache.valid && cache.f.len() == f.len() && cache.x.as_slice() == s.x;
+            if hit {
+                f.copy_from_slice(&cache.f);
+            }
+            hit
+        };
+        if !cached {
+            f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        }
         for (e, c) in self.effects.iter().zip(&self.evaluations) {
+            if cached && e.position_only() {
+                continue;
+            }
             c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             e.add_forces(s, f);
         }
@@ -152,16 +194,32 @@ impl EffectSet {
         self.effects.iter().map(|e| e.energy(x)).sum()
     }
 
-    /// (elastic, gravity) potential energies.
+    /// (elastic, gravity) potential energies at `x`. The position-only forces at `x` are
+    /// computed in the same pass and kept for the next [`EffectSet::forces`] at `x`.
     pub fn energy_split(&self, x: &[Vec3]) -> (f64, f64) {
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        let cache = &mut *cache;
+        cache.x.clear();
+        cache.x.extend_from_slice(x);
+        cache.f.clear();
+        cache.f.resize(x.len(), Vec3::ZERO);
+        // Position-only effects read neither velocity nor time.
+        let s = State { t: 0.0, x, v: &[] };
         let (mut el, mut gr) = (0.0, 0.0);
-        for e in &self.effects {
-            if e.name() == "gravity" {
-                gr += e.energy(x);
+        for (e, c) in self.effects.iter().zip(&self.evaluations) {
+            let energy = if e.position_only() {
+                c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                e.add_forces_energy(&s, &mut cache.f)
             } else {
-                el += e.energy(x);
+                e.energy(x)
+            };
+            if e.name() == "gravity" {
+                gr += energy;
+            } else {
+                el += energy;
             }
         }
+        cache.valid = true;
         (el, gr)
     }
 

@@ -52,7 +52,9 @@ impl<const N: usize> StencilSet<N> {
         }
     }
 
-    fn add_forces(&self, x: &[Vec3], f: &mut [Vec3]) {
+    /// Adds the forces `-c w_k d` and returns the energy `sum c/2 |d|^2`, `d = sum_k w_k x_k`.
+    fn add_forces(&self, x: &[Vec3], f: &mut [Vec3]) -> f64 {
+        let mut energy = 0.0;
         for (s, &c) in self.stencils.iter().zip(&self.c) {
             let mut d = Vec3::ZERO;
             for k in 0..N {
@@ -61,7 +63,9 @@ impl<const N: usize> StencilSet<N> {
             for k in 0..N {
                 f[s.idx[k] as usize] -= d * (c * s.w[k]);
             }
+            energy += 0.5 * c * d.length_squared();
         }
+        energy
     }
 
     fn add_jacobians(&self, dfdx: &mut BlockCsr) {
@@ -117,7 +121,13 @@ impl<const N: usize> Effect for StencilSet<N> {
     fn declare(&self, p: &mut PatternBuilder) {
         StencilSet::declare(self, p)
     }
+    fn position_only(&self) -> bool {
+        true
+    }
     fn add_forces(&self, s: &State, f: &mut [Vec3]) {
+        StencilSet::add_forces(self, s.x, f);
+    }
+    fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
         StencilSet::add_forces(self, s.x, f)
     }
     fn add_jacobians(&self, _s: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
