@@ -71,6 +71,16 @@ pub trait Effect: Send + Sync {
         self.energy(s.x)
     }
 
+    /// [`Effect::add_forces_energy`] over the `part`-th of `parts` slices of the effect's elements,
+    /// so that one pass can be split across threads. Default: part 0 does everything.
+    fn add_forces_energy_part(&self, s: &State, f: &mut [Vec3], part: usize, _parts: usize) -> f64 {
+        if part == 0 {
+            self.add_forces_energy(s, f)
+        } else {
+            0.0
+        }
+    }
+
     /// True for effects that can add energy from outside the cloth (wind); the divergence guard
     /// accounts for their work so that a gust is not mistaken for an instability.
     fn injects_energy(&self) -> bool {
@@ -102,7 +112,18 @@ pub struct EffectSet {
 struct PositionForces {
     x: Vec<Vec3>,
     f: Vec<Vec3>,
+    /// The second half's forces when the pass is split across two threads.
+    half: Vec<Vec3>,
     valid: bool,
+}
+
+/// Vertex count from which the energy-and-force pass is split across two threads (below it, the
+/// cost of waking a thread is comparable to the pass; measured with `cargo bench --bench step`).
+const PAR_VERTICES: usize = 2048;
+
+/// The index range of the `part`-th of `parts` near-equal slices of `len` elements.
+pub(crate) fn part_range(len: usize, part: usize, parts: usize) -> std::ops::Range<usize> {
+    len * part / parts..len * (part + 1) / parts
 }
 
 impl EffectSet {
@@ -201,17 +222,43 @@ impl EffectSet {
         let cache = &mut *cache;
         cache.x.clear();
         cache.x.extend_from_slice(x);
-        cache.f.clear();
-        cache.f.resize(x.len(), Vec3::ZERO);
+        let (el, gr) = if x.len() >= PAR_VERTICES && rayon::current_num_threads() > 1 {
+            let (f, half) = (&mut cache.f, &mut cache.half);
+            let (a, b) = rayon::join(
+                || self.energy_part(x, f, 0, 2),
+                || self.energy_part(x, half, 1, 2),
+            );
+            for (f, h) in cache.f.iter_mut().zip(&cache.half) {
+                *f += *h;
+            }
+            (a.0 + b.0, a.1 + b.1)
+        } else {
+            self.energy_part(x, &mut cache.f, 0, 1)
+        };
+        for (e, c) in self.effects.iter().zip(&self.evaluations) {
+            if e.position_only() {
+                c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        cache.valid = true;
+        (el, gr)
+    }
+
+    /// (elastic, gravity) energies of one part of the elements, and the position-only forces of
+    /// that part (overwriting `f`).
+    fn energy_part(&self, x: &[Vec3], f: &mut Vec<Vec3>, part: usize, parts: usize) -> (f64, f64) {
+        f.clear();
+        f.resize(x.len(), Vec3::ZERO);
         // Position-only effects read neither velocity nor time.
         let s = State { t: 0.0, x, v: &[] };
         let (mut el, mut gr) = (0.0, 0.0);
-        for (e, c) in self.effects.iter().zip(&self.evaluations) {
+        for e in &self.effects {
             let energy = if e.position_only() {
-                c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                e.add_forces_energy(&s, &mut cache.f)
-            } else {
+                e.add_forces_energy_part(&s, f, part, parts)
+            } else if part == 0 {
                 e.energy(x)
+            } else {
+                0.0
             };
             if e.name() == "gravity" {
                 gr += energy;
@@ -219,7 +266,6 @@ impl EffectSet {
                 el += energy;
             }
         }
-        cache.valid = true;
         (el, gr)
     }
 

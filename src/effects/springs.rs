@@ -73,8 +73,13 @@ impl Effect for Springs {
     }
 
     fn add_forces_energy(&self, st: &State, f: &mut [Vec3]) -> f64 {
+        self.add_forces_energy_part(st, f, 0, 1)
+    }
+
+    fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
+        let r = super::part_range(self.springs.len(), part, parts);
         let mut energy = 0.0;
-        for (s, &k) in self.springs.iter().zip(&self.k) {
+        for (s, &k) in self.springs[r.clone()].iter().zip(&self.k[r]) {
             let (fi, e) = tension(st.x, s, k);
             f[s.i as usize] += fi;
             f[s.j as usize] -= fi;
