@@ -86,6 +86,7 @@ impl Csr {
         self.row_start.len().saturating_sub(1)
     }
 
+    #[inline]
     fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
         let (s, e) = (self.row_start[r], self.row_start[r + 1]);
         (&self.cols[s..e], &self.vals[s..e])
@@ -113,6 +114,43 @@ impl Csr {
                 *yr = self.row_times(r, x);
             }
         }
+    }
+
+    /// Sorts every row by column (Galerkin products leave them in first-touch order), so that
+    /// the strictly lower and upper parts of a row are contiguous.
+    fn sort_rows(&mut self) {
+        let mut row: Vec<(u32, Mat3)> = Vec::new();
+        for r in 0..self.rows() {
+            let (s, e) = (self.row_start[r], self.row_start[r + 1]);
+            if self.cols[s..e].is_sorted() {
+                continue;
+            }
+            row.clear();
+            row.extend(
+                self.cols[s..e]
+                    .iter()
+                    .copied()
+                    .zip(self.vals[s..e].iter().copied()),
+            );
+            row.sort_unstable_by_key(|&(c, _)| c);
+            for (k, (c, m)) in row.iter().enumerate() {
+                self.cols[s + k] = *c;
+                self.vals[s + k] = *m;
+            }
+        }
+    }
+
+    /// Value index of each row's diagonal block (rows sorted by column).
+    fn diagonal_slots(&self, level: usize) -> Result<Vec<usize>, MultigridError> {
+        (0..self.rows())
+            .map(|r| {
+                let s = self.row_start[r];
+                self.cols[s..self.row_start[r + 1]]
+                    .binary_search(&(r as u32))
+                    .map(|k| s + k)
+                    .map_err(|_| MultigridError::MissingDiagonal { level, row: r })
+            })
+            .collect()
     }
 
     fn diagonal_blocks(&self, level: usize) -> Result<Vec<Mat3>, MultigridError> {
@@ -420,7 +458,10 @@ impl Dense {
 
 #[derive(Debug, Clone)]
 struct Level {
+    /// The level's matrix, rows sorted by column.
     a: Csr,
+    /// Value index of each row's diagonal block in `a`.
+    diag: Vec<usize>,
     dinv: Vec<Mat3>,
     /// Prolongator to this level from the next coarser one and its transpose (empty on the
     /// coarsest level).
@@ -432,11 +473,14 @@ struct Level {
 }
 
 impl Level {
-    fn new(a: Csr, level: usize) -> Result<Level, MultigridError> {
+    fn new(mut a: Csr, level: usize) -> Result<Level, MultigridError> {
         let n = a.rows();
+        a.sort_rows();
+        let diag = a.diagonal_slots(level)?;
         let dinv = invert_diagonal(&a, level)?;
         Ok(Level {
             a,
+            diag,
             dinv,
             p: Csr::default(),
             pt: Csr::default(),
@@ -449,18 +493,31 @@ impl Level {
     /// One forward (`reverse == false`) or backward block Gauss-Seidel sweep on `A x = b`.
     fn gauss_seidel(&mut self, reverse: bool) {
         let n = self.a.rows();
+        let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
-            let (cols, vals) = self.a.row(i);
-            let mut s = self.b[i];
-            for (&j, &m) in cols.iter().zip(vals) {
-                s -= m * self.x[j as usize];
+            let mut s = b[i];
+            for k in a.row_start[i]..a.row_start[i + 1] {
+                s -= a.vals[k] * x[a.cols[k] as usize];
             }
-            self.x[i] += self.dinv[i] * s;
+            x[i] += dinv[i] * s;
         };
         if reverse {
             (0..n).rev().for_each(&mut sweep);
         } else {
             (0..n).for_each(&mut sweep);
+        }
+    }
+
+    /// The forward sweep from `x = 0`: the rows after `i` are still zero, so only the strictly
+    /// lower part contributes, `x_i = D_i^-1 (b_i - sum_{j < i} A_ij x_j)` (half the work).
+    fn forward_sweep_from_zero(&mut self) {
+        let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
+        for i in 0..a.rows() {
+            let mut s = b[i];
+            for k in a.row_start[i]..self.diag[i] {
+                s -= a.vals[k] * x[a.cols[k] as usize];
+            }
+            x[i] = dinv[i] * s;
         }
     }
 }
@@ -470,13 +527,11 @@ impl Level {
     /// the rows after it still zero, so only the strictly upper part contributes,
     /// `r_i = -sum_{j > i} A_ij x_j` (half the multiplications of a full residual).
     fn residual_after_forward_sweep(&mut self) {
+        let a = &self.a;
         for (i, ri) in self.r.iter_mut().enumerate() {
-            let (cols, vals) = self.a.row(i);
             let mut acc = Vec3::ZERO;
-            for (&j, &m) in cols.iter().zip(vals) {
-                if j as usize > i {
-                    acc -= m * self.x[j as usize];
-                }
+            for k in self.diag[i] + 1..a.row_start[i + 1] {
+                acc -= a.vals[k] * self.x[a.cols[k] as usize];
             }
             *ri = acc;
         }
@@ -563,10 +618,13 @@ impl Multigrid {
     /// Replaces the finest-level matrix by `a` (same size) without rebuilding the coarse levels:
     /// the smoother then sees the current matrix while the coarse correction is from the last
     /// build. Still a symmetric positive definite preconditioner.
-    pub fn refresh_finest(&mut self, a: Csr) -> Result<(), MultigridError> {
+    pub fn refresh_finest(&mut self, mut a: Csr) -> Result<(), MultigridError> {
+        a.sort_rows();
+        let diag = a.diagonal_slots(0)?;
         let dinv = invert_diagonal(&a, 0)?;
         let l0 = &mut self.levels[0];
         l0.a = a;
+        l0.diag = diag;
         l0.dinv = dinv;
         Ok(())
     }
@@ -588,11 +646,11 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
     let Some((l, rest)) = levels.split_first_mut() else {
         return;
     };
-    l.x.iter_mut().for_each(|x| *x = Vec3::ZERO);
     if rest.is_empty() {
         match dense {
             Some(d) => d.solve(&l.b, &mut l.x, tmp),
             None => {
+                l.x.iter_mut().for_each(|x| *x = Vec3::ZERO);
                 for _ in 0..COARSE_SWEEPS {
                     l.gauss_seidel(false);
                     l.gauss_seidel(true);
@@ -601,7 +659,7 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         }
         return;
     }
-    l.gauss_seidel(false);
+    l.forward_sweep_from_zero();
     l.residual_after_forward_sweep();
     l.pt.mul(&l.r, &mut rest[0].b);
     cycle(rest, dense, tmp);
