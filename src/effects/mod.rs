@@ -53,6 +53,13 @@ pub trait Effect: Send + Sync {
     /// Adds `df/dx` and `df/dv` at `s`. Default: the force does not depend on state.
     fn add_jacobians(&self, _s: &State, _dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {}
 
+    /// True when the Jacobians do not depend on the state (quadratic energies, linear damping):
+    /// the implicit solver assembles them once, and [`Effect::add_jacobians`] must then not read
+    /// its state argument.
+    fn constant_jacobians(&self) -> bool {
+        false
+    }
+
     /// Potential energy at `x` (conservative effects only; 0 otherwise).
     fn energy(&self, _x: &[Vec3]) -> f64 {
         0.0
@@ -207,6 +214,28 @@ impl EffectSet {
         dfdx.clear();
         dfdv.clear();
         for e in &self.effects {
+            e.add_jacobians(s, dfdx, dfdv);
+        }
+    }
+
+    /// The state-independent Jacobians alone (overwrites both matrices).
+    pub fn constant_jacobians(&self, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
+        dfdx.clear();
+        dfdv.clear();
+        let none = State {
+            t: 0.0,
+            x: &[],
+            v: &[],
+        };
+        for e in self.effects.iter().filter(|e| e.constant_jacobians()) {
+            e.add_jacobians(&none, dfdx, dfdv);
+        }
+    }
+
+    /// Adds the state-dependent Jacobians at `s` (the complement of
+    /// [`EffectSet::constant_jacobians`]).
+    pub fn add_varying_jacobians(&self, s: &State, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
+        for e in self.effects.iter().filter(|e| !e.constant_jacobians()) {
             e.add_jacobians(s, dfdx, dfdv);
         }
     }

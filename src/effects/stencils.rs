@@ -137,6 +137,9 @@ impl<const N: usize> Effect for StencilSet<N> {
     fn add_jacobians(&self, _s: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
         StencilSet::add_jacobians(self, dfdx)
     }
+    fn constant_jacobians(&self) -> bool {
+        true
+    }
     fn energy(&self, x: &[Vec3]) -> f64 {
         StencilSet::energy(self, x)
     }

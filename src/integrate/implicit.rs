@@ -45,6 +45,12 @@ pub enum Preconditioner {
 /// the one right after the last build by a quarter (plus two).
 const REBUILD_EVERY: u32 = 50;
 
+/// The state-independent parts of `df/dx` and `df/dv`, assembled once in `prepare`.
+struct Constant {
+    dfdx: BlockCsr,
+    dfdv: BlockCsr,
+}
+
 /// The multigrid state kept across steps.
 struct Hierarchy {
     mg: Multigrid,
@@ -170,6 +176,7 @@ pub struct Implicit {
     /// df/dx, then reused in place as the system matrix A.
     a: Option<BlockCsr>,
     dfdv: Option<BlockCsr>,
+    constant: Option<Constant>,
     hierarchy: Option<Hierarchy>,
     /// Storage for the filtered fine matrix handed to the multigrid.
     filtered: Csr,
@@ -191,6 +198,7 @@ impl Implicit {
             preconditioner,
             a: None,
             dfdv: None,
+            constant: None,
             hierarchy: None,
             filtered: Csr::default(),
             pcg: Pcg::default(),
@@ -265,6 +273,9 @@ impl Integrator for Implicit {
         let mut p = PatternBuilder::new();
         effects.declare(&mut p);
         let m = p.build(n);
+        let (mut dfdx, mut dfdv) = (m.clone(), m.clone());
+        effects.constant_jacobians(&mut dfdx, &mut dfdv);
+        self.constant = Some(Constant { dfdx, dfdv });
         self.dfdv = Some(m.clone());
         self.a = Some(m);
         self.hierarchy = None;
@@ -287,12 +298,16 @@ impl Integrator for Implicit {
         }
         let filt = &d.constraints.filter;
         {
-            let (Some(a), Some(dfdv)) = (self.a.as_mut(), self.dfdv.as_mut()) else {
+            let (Some(a), Some(dfdv), Some(k)) =
+                (self.a.as_mut(), self.dfdv.as_mut(), self.constant.as_ref())
+            else {
                 unreachable!("prepared above");
             };
             let state = State { t, x, v };
             d.effects.forces(&state, &mut self.f0);
-            d.effects.jacobians(&state, a, dfdv);
+            a.assign(&k.dfdx);
+            dfdv.assign(&k.dfdv);
+            d.effects.add_varying_jacobians(&state, a, dfdv);
 
             // b = h (f0 + h dfdx v0), then A = M - h dfdv - h^2 dfdx.
             a.mul(v, &mut self.b);
