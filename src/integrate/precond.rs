@@ -248,6 +248,16 @@ impl Csr {
     }
 }
 
+/// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
+#[inline(always)]
+fn row_dot(cols: &[u32], vals: &[Mat3], x: &[Vec3]) -> Vec3 {
+    let mut acc = Vec3::ZERO;
+    for (&j, m) in cols.iter().zip(vals) {
+        acc += *m * x[j as usize];
+    }
+    acc
+}
+
 fn frob2(m: &Mat3) -> f64 {
     m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()
 }
@@ -495,10 +505,8 @@ impl Level {
         let n = self.a.rows();
         let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
-            let mut s = b[i];
-            for k in a.row_start[i]..a.row_start[i + 1] {
-                s -= a.vals[k] * x[a.cols[k] as usize];
-            }
+            let (cols, vals) = a.row(i);
+            let s = b[i] - row_dot(cols, vals, x);
             x[i] += dinv[i] * s;
         };
         if reverse {
@@ -513,10 +521,8 @@ impl Level {
     fn forward_sweep_from_zero(&mut self) {
         let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         for i in 0..a.rows() {
-            let mut s = b[i];
-            for k in a.row_start[i]..self.diag[i] {
-                s -= a.vals[k] * x[a.cols[k] as usize];
-            }
+            let lower = a.row_start[i]..self.diag[i];
+            let s = b[i] - row_dot(&a.cols[lower.clone()], &a.vals[lower], x);
             x[i] = dinv[i] * s;
         }
     }
@@ -529,11 +535,8 @@ impl Level {
     fn residual_after_forward_sweep(&mut self) {
         let a = &self.a;
         for (i, ri) in self.r.iter_mut().enumerate() {
-            let mut acc = Vec3::ZERO;
-            for k in self.diag[i] + 1..a.row_start[i + 1] {
-                acc -= a.vals[k] * self.x[a.cols[k] as usize];
-            }
-            *ri = acc;
+            let upper = self.diag[i] + 1..a.row_start[i + 1];
+            *ri = -row_dot(&a.cols[upper.clone()], &a.vals[upper], &self.x);
         }
     }
 }
