@@ -124,8 +124,9 @@ struct PositionForces {
     valid: bool,
 }
 
-/// Vertex count from which the energy-and-force pass is split across two threads (below it, the
-/// cost of waking a thread is comparable to the pass; measured with `cargo bench --bench step`).
+/// Vertex count from which the energy-and-force pass is split in two halves run on two threads
+/// (below it, waking a thread costs about as much as the pass). The split depends on the size
+/// only, so results do not depend on the number of threads.
 const PAR_VERTICES: usize = 2048;
 
 /// The index range of the `part`-th of `parts` near-equal slices of `len` elements.
@@ -251,7 +252,7 @@ impl EffectSet {
         let cache = &mut *cache;
         cache.x.clear();
         cache.x.extend_from_slice(x);
-        let (el, gr) = if x.len() >= PAR_VERTICES && rayon::current_num_threads() > 1 {
+        let (el, gr) = if x.len() >= PAR_VERTICES {
             let (f, half) = (&mut cache.f, &mut cache.half);
             let (a, b) = rayon::join(
                 || self.energy_part(x, f, 0, 2),
