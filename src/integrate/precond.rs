@@ -96,14 +96,10 @@ impl Csr {
         (&self.cols[s..e], &self.vals[s..e])
     }
 
-    #[inline]
+    #[inline(always)]
     fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
         let (cols, vals) = self.row(r);
-        let mut acc = Vec3::ZERO;
-        for (&j, &m) in cols.iter().zip(vals) {
-            acc += m * x[j as usize];
-        }
-        acc
+        row_dot(cols, vals, x)
     }
 
     /// `y = A x`.
@@ -582,22 +578,22 @@ impl Level {
             ..
         } = self;
         let n = a.rows();
-        let sweep = |rows: std::ops::Range<usize>, lo: &dyn Fn(usize) -> usize, x: &mut [Vec3]| {
+        // The lower part starts at the row start, or at the cut for the second half.
+        let sweep = |rows: std::ops::Range<usize>, cut: Option<&[usize]>, x: &mut [Vec3]| {
             let offset = rows.start;
             for i in rows {
-                let lower = lo(i)..diag[i];
+                let lower = cut.map_or(a.row_start[i], |c| c[i])..diag[i];
                 let s = b[i] - row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset);
                 x[i - offset] = dinv[i] * s;
             }
         };
         match halves {
-            None => sweep(0..n, &|i| a.row_start[i], x),
+            None => sweep(0..n, None, x),
             Some(h) => {
                 let (xa, xb) = x.split_at_mut(h.mid);
-                let split = &h.split;
                 rayon::join(
-                    || sweep(0..h.mid, &|i| a.row_start[i], xa),
-                    || sweep(h.mid..n, &|i| split[i], xb),
+                    || sweep(0..h.mid, None, xa),
+                    || sweep(h.mid..n, Some(&h.split), xb),
                 );
             }
         }

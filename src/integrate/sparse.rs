@@ -129,6 +129,7 @@ impl BlockCsr {
     }
 
     /// Column indices and blocks of row `r` (read-only view for preconditioners).
+    #[inline]
     pub fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
         let (s, e) = (self.row_start[r], self.row_start[r + 1]);
         (&self.cols[s..e], &self.vals[s..e])
@@ -166,10 +167,12 @@ impl BlockCsr {
         self.zero = false;
     }
 
+    #[inline(always)]
     fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
+        let (cols, vals) = self.row(r);
         let mut acc = Vec3::ZERO;
-        for k in self.row_start[r]..self.row_start[r + 1] {
-            acc += self.vals[k] * x[self.cols[k] as usize];
+        for (&j, m) in cols.iter().zip(vals) {
+            acc += *m * x[j as usize];
         }
         acc
     }
