@@ -148,6 +148,11 @@ impl EffectSet {
     pub fn push(&mut self, e: Box<dyn Effect>) {
         self.effects.push(e);
         self.evaluations.push(Default::default());
+        // The cached forces lack the new effect.
+        self.cache
+            .get_mut()
+            .unwrap_or_else(|p| p.into_inner())
+            .valid = false;
     }
 
     pub fn iter(&self) -> impl Iterator<Item = &dyn Effect> {
@@ -326,4 +331,149 @@ pub(crate) fn outer_pub(a: Vec3, b: Vec3) -> crate::Mat3 {
 #[inline]
 pub(crate) fn outer(a: Vec3, b: Vec3) -> crate::Mat3 {
     crate::Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::topology::Spring;
+
+    /// A bent chain of 5 particles with springs (position-only), gravity and air drag
+    /// (velocity-dependent), plus the springs' own reference sum.
+    fn chain() -> (EffectSet, Vec<Vec3>, Vec<Vec3>, Vec<f64>) {
+        let x: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(i as f64 * 0.1, (i * i) as f64 * 0.013, -0.02 * i as f64))
+            .collect();
+        let v: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(0.3, -0.1 * i as f64, 0.2))
+            .collect();
+        let mass = vec![0.01, 0.02, 0.015, 0.01, 0.03];
+        let springs = (0..4)
+            .map(|i| Spring {
+                i,
+                j: i + 1,
+                rest: 0.09,
+            })
+            .collect();
+        let mut set = EffectSet::new();
+        set.push_gravity(Gravity::new(Vec3::new(0.0, 0.0, -9.81), &mass));
+        set.push(Box::new(Springs::new(
+            "stretch",
+            springs,
+            vec![50.0, 60.0, 70.0, 80.0],
+            "k".into(),
+        )));
+        set.push(Box::new(AirDrag::new(&[0.5; 5], &mass)));
+        (set, x, v, mass)
+    }
+
+    /// Sum of each effect's forces evaluated on its own (no cache involved).
+    fn reference(set: &EffectSet, s: &State) -> Vec<Vec3> {
+        let mut f = vec![Vec3::ZERO; s.x.len()];
+        for e in set.iter() {
+            e.add_forces(s, &mut f);
+        }
+        f
+    }
+
+    fn close(a: &[Vec3], b: &[Vec3]) {
+        for (p, q) in a.iter().zip(b) {
+            // Same terms, possibly summed in another order: a few ulps of the largest term.
+            assert!(
+                (*p - *q).length() <= 1e-12 * (1.0 + q.length()),
+                "{p} vs {q}"
+            );
+        }
+    }
+
+    #[test]
+    fn cached_forces_equal_fresh_forces_and_skip_the_position_only_pass() {
+        let (set, mut x, v, _) = chain();
+        set.energy_split(&x);
+        let mut f = vec![Vec3::ZERO; x.len()];
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+        // The springs were evaluated once (in the energy pass), the drag at every call.
+        let counts = set.evaluation_counts();
+        assert_eq!(counts, vec![("gravity", 1), ("stretch", 1), ("damping", 1)]);
+
+        // Moved positions miss the cache and are evaluated afresh.
+        x[2].y += 1e-3;
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+        assert_eq!(set.evaluation_counts()[1], ("stretch", 2));
+    }
+
+    #[test]
+    fn energy_pass_matches_the_energies_and_a_new_effect_invalidates_the_cache() {
+        let (mut set, x, v, mass) = chain();
+        let (el, gr) = set.energy_split(&x);
+        let springs_energy: f64 = set
+            .iter()
+            .filter(|e| e.name() == "stretch")
+            .map(|e| e.energy(&x))
+            .sum();
+        let gravity_energy: f64 = -x
+            .iter()
+            .zip(&mass)
+            .map(|(p, m)| m * -9.81 * p.z)
+            .sum::<f64>();
+        assert!((el - springs_energy).abs() <= 1e-15 * springs_energy.abs().max(1e-30));
+        assert!((gr - gravity_energy).abs() <= 1e-14 * gravity_energy.abs());
+        set.push_gravity(Gravity::new(Vec3::new(1.0, 0.0, 0.0), &mass));
+        let mut f = vec![Vec3::ZERO; x.len()];
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+    }
 }
