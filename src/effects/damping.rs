@@ -68,6 +68,9 @@ impl Effect for AirDrag {
             *fi -= *vi * *cm;
         }
     }
+    fn constant_jacobians(&self) -> bool {
+        true
+    }
     fn add_jacobians(&self, _s: &State, _dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
         for (i, cm) in self.cm.iter().enumerate() {
             dfdv.add(i as u32, i as u32, Mat3::IDENTITY * -cm);
@@ -103,6 +106,9 @@ impl Effect for VelocityDiffusion {
             f[i as usize] += fi;
             f[j as usize] -= fi;
         }
+    }
+    fn constant_jacobians(&self) -> bool {
+        true
     }
     fn add_jacobians(&self, _s: &State, _dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
         for (&(i, j), &k) in self.pairs.iter().zip(&self.k) {

@@ -28,6 +28,19 @@ impl Effect for Gravity {
         }
     }
 
+    fn position_only(&self) -> bool {
+        true
+    }
+
+    fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
+        let mut energy = 0.0;
+        for ((fi, m), xi) in f.iter_mut().zip(&self.mass).zip(s.x) {
+            *fi += self.g * *m;
+            energy -= m * self.g.dot(*xi);
+        }
+        energy
+    }
+
     fn energy(&self, x: &[Vec3]) -> f64 {
         -x.iter()
             .zip(&self.mass)

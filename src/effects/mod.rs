@@ -18,6 +18,7 @@ pub use wind::{Gust, Wind, WindKey};
 
 use crate::integrate::{BlockCsr, PatternBuilder};
 use crate::Vec3;
+use std::sync::Mutex;
 
 /// The state an effect is evaluated at.
 #[derive(Clone, Copy)]
@@ -52,9 +53,39 @@ pub trait Effect: Send + Sync {
     /// Adds `df/dx` and `df/dv` at `s`. Default: the force does not depend on state.
     fn add_jacobians(&self, _s: &State, _dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {}
 
+    /// True when the Jacobians do not depend on the state (quadratic energies, linear damping):
+    /// the implicit solver assembles them once, and [`Effect::add_jacobians`] must then not read
+    /// its state argument.
+    fn constant_jacobians(&self) -> bool {
+        false
+    }
+
     /// Potential energy at `x` (conservative effects only; 0 otherwise).
     fn energy(&self, _x: &[Vec3]) -> f64 {
         0.0
+    }
+
+    /// True when the force depends on positions only (not on velocity or time): such forces
+    /// computed alongside the energy at `x` serve the next force evaluation at the same `x`.
+    fn position_only(&self) -> bool {
+        false
+    }
+
+    /// Adds the forces at `s` to `f` and returns the energy at `s.x`. Elastic effects override
+    /// this with one fused pass (the guard needs the energy of every substep's result).
+    fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
+        self.add_forces(s, f);
+        self.energy(s.x)
+    }
+
+    /// [`Effect::add_forces_energy`] over the `part`-th of `parts` slices of the effect's elements,
+    /// so that one pass can be split across threads. Default: part 0 does everything.
+    fn add_forces_energy_part(&self, s: &State, f: &mut [Vec3], part: usize, _parts: usize) -> f64 {
+        if part == 0 {
+            self.add_forces_energy(s, f)
+        } else {
+            0.0
+        }
     }
 
     /// True for effects that can add energy from outside the cloth (wind); the divergence guard
@@ -75,6 +106,32 @@ pub struct EffectSet {
     effects: Vec<Box<dyn Effect>>,
     evaluations: Vec<std::sync::atomic::AtomicU64>,
     gravity: Vec3,
+    cache: Mutex<PositionForces>,
+}
+
+/// Sum of the position-only forces at the configuration `x` of the last energy evaluation.
+///
+/// The divergence guard evaluates the energy of every substep's result `x_{n+1}`; doing so in the
+/// same pass as the forces and keeping those forces means the next substep, which starts from
+/// `x_{n+1}`, does not evaluate them again. The cache is used only when the positions are
+/// bitwise identical, so it never changes a result.
+#[derive(Default)]
+struct PositionForces {
+    x: Vec<Vec3>,
+    f: Vec<Vec3>,
+    /// The second half's forces when the pass is split across two threads.
+    half: Vec<Vec3>,
+    valid: bool,
+}
+
+/// Vertex count from which the energy-and-force pass is split in two halves run on two threads
+/// (below it, waking a thread costs about as much as the pass). The split depends on the size
+/// only, so results do not depend on the number of threads.
+const PAR_VERTICES: usize = 2048;
+
+/// The index range of the `part`-th of `parts` near-equal slices of `len` elements.
+pub(crate) fn part_range(len: usize, part: usize, parts: usize) -> std::ops::Range<usize> {
+    len * part / parts..len * (part + 1) / parts
 }
 
 impl EffectSet {
@@ -91,6 +148,11 @@ impl EffectSet {
     pub fn push(&mut self, e: Box<dyn Effect>) {
         self.effects.push(e);
         self.evaluations.push(Default::default());
+        // The cached forces lack the new effect.
+        self.cache
+            .get_mut()
+            .unwrap_or_else(|p| p.into_inner())
+            .valid = false;
     }
 
     pub fn iter(&self) -> impl Iterator<Item = &dyn Effect> {
@@ -120,10 +182,24 @@ impl EffectSet {
         }
     }
 
-    /// Sum of all forces at `s` (overwrites `f`).
+    /// Sum of all forces at `s` (overwrites `f`). Position-only forces come from the cache when
+    /// the last energy evaluation was at exactly these positions.
     pub fn forces(&self, s: &State, f: &mut [Vec3]) {
-        f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let cached = {
+            let cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+            let hit = cache.valid && cache.f.len() == f.len() && cache.x.as_slice() == s.x;
+            if hit {
+                f.copy_from_slice(&cache.f);
+            }
+            hit
+        };
+        if !cached {
+            f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        }
         for (e, c) in self.effects.iter().zip(&self.evaluations) {
+            if cached && e.position_only() {
+                continue;
+            }
             c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             e.add_forces(s, f);
         }
@@ -148,18 +224,81 @@ impl EffectSet {
         }
     }
 
+    /// The state-independent Jacobians alone (overwrites both matrices).
+    pub fn constant_jacobians(&self, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
+        dfdx.clear();
+        dfdv.clear();
+        let none = State {
+            t: 0.0,
+            x: &[],
+            v: &[],
+        };
+        for e in self.effects.iter().filter(|e| e.constant_jacobians()) {
+            e.add_jacobians(&none, dfdx, dfdv);
+        }
+    }
+
+    /// Adds the state-dependent Jacobians at `s` (the complement of
+    /// [`EffectSet::constant_jacobians`]).
+    pub fn add_varying_jacobians(&self, s: &State, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
+        for e in self.effects.iter().filter(|e| !e.constant_jacobians()) {
+            e.add_jacobians(s, dfdx, dfdv);
+        }
+    }
+
     pub fn energy(&self, x: &[Vec3]) -> f64 {
         self.effects.iter().map(|e| e.energy(x)).sum()
     }
 
-    /// (elastic, gravity) potential energies.
+    /// (elastic, gravity) potential energies at `x`. The position-only forces at `x` are
+    /// computed in the same pass and kept for the next [`EffectSet::forces`] at `x`.
     pub fn energy_split(&self, x: &[Vec3]) -> (f64, f64) {
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        let cache = &mut *cache;
+        cache.x.clear();
+        cache.x.extend_from_slice(x);
+        let (el, gr) = if x.len() >= PAR_VERTICES {
+            let (f, half) = (&mut cache.f, &mut cache.half);
+            let (a, b) = rayon::join(
+                || self.energy_part(x, f, 0, 2),
+                || self.energy_part(x, half, 1, 2),
+            );
+            for (f, h) in cache.f.iter_mut().zip(&cache.half) {
+                *f += *h;
+            }
+            (a.0 + b.0, a.1 + b.1)
+        } else {
+            self.energy_part(x, &mut cache.f, 0, 1)
+        };
+        for (e, c) in self.effects.iter().zip(&self.evaluations) {
+            if e.position_only() {
+                c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        cache.valid = true;
+        (el, gr)
+    }
+
+    /// (elastic, gravity) energies of one part of the elements, and the position-only forces of
+    /// that part (overwriting `f`).
+    fn energy_part(&self, x: &[Vec3], f: &mut Vec<Vec3>, part: usize, parts: usize) -> (f64, f64) {
+        f.clear();
+        f.resize(x.len(), Vec3::ZERO);
+        // Position-only effects read neither velocity nor time.
+        let s = State { t: 0.0, x, v: &[] };
         let (mut el, mut gr) = (0.0, 0.0);
         for e in &self.effects {
-            if e.name() == "gravity" {
-                gr += e.energy(x);
+            let energy = if e.position_only() {
+                e.add_forces_energy_part(&s, f, part, parts)
+            } else if part == 0 {
+                e.energy(x)
             } else {
-                el += e.energy(x);
+                0.0
+            };
+            if e.name() == "gravity" {
+                gr += energy;
+            } else {
+                el += energy;
             }
         }
         (el, gr)
@@ -192,4 +331,149 @@ pub(crate) fn outer_pub(a: Vec3, b: Vec3) -> crate::Mat3 {
 #[inline]
 pub(crate) fn outer(a: Vec3, b: Vec3) -> crate::Mat3 {
     crate::Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::topology::Spring;
+
+    /// A bent chain of 5 particles with springs (position-only), gravity and air drag
+    /// (velocity-dependent), plus the springs' own reference sum.
+    fn chain() -> (EffectSet, Vec<Vec3>, Vec<Vec3>, Vec<f64>) {
+        let x: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(i as f64 * 0.1, (i * i) as f64 * 0.013, -0.02 * i as f64))
+            .collect();
+        let v: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(0.3, -0.1 * i as f64, 0.2))
+            .collect();
+        let mass = vec![0.01, 0.02, 0.015, 0.01, 0.03];
+        let springs = (0..4)
+            .map(|i| Spring {
+                i,
+                j: i + 1,
+                rest: 0.09,
+            })
+            .collect();
+        let mut set = EffectSet::new();
+        set.push_gravity(Gravity::new(Vec3::new(0.0, 0.0, -9.81), &mass));
+        set.push(Box::new(Springs::new(
+            "stretch",
+            springs,
+            vec![50.0, 60.0, 70.0, 80.0],
+            "k".into(),
+        )));
+        set.push(Box::new(AirDrag::new(&[0.5; 5], &mass)));
+        (set, x, v, mass)
+    }
+
+    /// Sum of each effect's forces evaluated on its own (no cache involved).
+    fn reference(set: &EffectSet, s: &State) -> Vec<Vec3> {
+        let mut f = vec![Vec3::ZERO; s.x.len()];
+        for e in set.iter() {
+            e.add_forces(s, &mut f);
+        }
+        f
+    }
+
+    fn close(a: &[Vec3], b: &[Vec3]) {
+        for (p, q) in a.iter().zip(b) {
+            // Same terms, possibly summed in another order: a few ulps of the largest term.
+            assert!(
+                (*p - *q).length() <= 1e-12 * (1.0 + q.length()),
+                "{p} vs {q}"
+            );
+        }
+    }
+
+    #[test]
+    fn cached_forces_equal_fresh_forces_and_skip_the_position_only_pass() {
+        let (set, mut x, v, _) = chain();
+        set.energy_split(&x);
+        let mut f = vec![Vec3::ZERO; x.len()];
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+        // The springs were evaluated once (in the energy pass), the drag at every call.
+        let counts = set.evaluation_counts();
+        assert_eq!(counts, vec![("gravity", 1), ("stretch", 1), ("damping", 1)]);
+
+        // Moved positions miss the cache and are evaluated afresh.
+        x[2].y += 1e-3;
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+        assert_eq!(set.evaluation_counts()[1], ("stretch", 2));
+    }
+
+    #[test]
+    fn energy_pass_matches_the_energies_and_a_new_effect_invalidates_the_cache() {
+        let (mut set, x, v, mass) = chain();
+        let (el, gr) = set.energy_split(&x);
+        let springs_energy: f64 = set
+            .iter()
+            .filter(|e| e.name() == "stretch")
+            .map(|e| e.energy(&x))
+            .sum();
+        let gravity_energy: f64 = -x
+            .iter()
+            .zip(&mass)
+            .map(|(p, m)| m * -9.81 * p.z)
+            .sum::<f64>();
+        assert!((el - springs_energy).abs() <= 1e-15 * springs_energy.abs().max(1e-30));
+        assert!((gr - gravity_energy).abs() <= 1e-14 * gravity_energy.abs());
+        set.push_gravity(Gravity::new(Vec3::new(1.0, 0.0, 0.0), &mass));
+        let mut f = vec![Vec3::ZERO; x.len()];
+        set.forces(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+            },
+            &mut f,
+        );
+        close(
+            &f,
+            &reference(
+                &set,
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &v,
+                },
+            ),
+        );
+    }
 }

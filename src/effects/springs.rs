@@ -38,6 +38,17 @@ impl Springs {
     }
 }
 
+/// Force on `i` and the extension `L - l` of one spring. Coincident endpoints have no direction
+/// and, by symmetry, no net force (branch-free: the select compiles to a conditional move).
+#[inline(always)]
+fn tension(x: &[Vec3], s: &Spring, k: f64) -> (Vec3, f64) {
+    let d = x[s.i as usize] - x[s.j as usize];
+    let len = d.length();
+    let e = len - s.rest;
+    let scale = if len > 0.0 { -k * e / len } else { 0.0 };
+    (d * scale, e)
+}
+
 impl Effect for Springs {
     fn name(&self) -> &'static str {
         self.name
@@ -49,18 +60,32 @@ impl Effect for Springs {
         }
     }
 
+    fn position_only(&self) -> bool {
+        true
+    }
+
     fn add_forces(&self, st: &State, f: &mut [Vec3]) {
         for (s, &k) in self.springs.iter().zip(&self.k) {
-            let d = st.x[s.i as usize] - st.x[s.j as usize];
-            let len = d.length();
-            if len <= 0.0 {
-                // Coincident endpoints: no direction, and by symmetry no net force.
-                continue;
-            }
-            let fi = d * (-k * (len - s.rest) / len);
+            let (fi, _) = tension(st.x, s, k);
             f[s.i as usize] += fi;
             f[s.j as usize] -= fi;
         }
+    }
+
+    fn add_forces_energy(&self, st: &State, f: &mut [Vec3]) -> f64 {
+        self.add_forces_energy_part(st, f, 0, 1)
+    }
+
+    fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
+        let r = super::part_range(self.springs.len(), part, parts);
+        let mut energy = 0.0;
+        for (s, &k) in self.springs[r.clone()].iter().zip(&self.k[r]) {
+            let (fi, e) = tension(st.x, s, k);
+            f[s.i as usize] += fi;
+            f[s.j as usize] -= fi;
+            energy += 0.5 * k * e * e;
+        }
+        energy
     }
 
     fn add_jacobians(&self, st: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {

@@ -52,8 +52,11 @@ impl<const N: usize> StencilSet<N> {
         }
     }
 
-    fn add_forces(&self, x: &[Vec3], f: &mut [Vec3]) {
-        for (s, &c) in self.stencils.iter().zip(&self.c) {
+    /// Adds the forces `-c w_k d` and returns the energy `sum c/2 |d|^2`, `d = sum_k w_k x_k`.
+    fn add_forces(&self, x: &[Vec3], f: &mut [Vec3], part: usize, parts: usize) -> f64 {
+        let r = super::part_range(self.stencils.len(), part, parts);
+        let mut energy = 0.0;
+        for (s, &c) in self.stencils[r.clone()].iter().zip(&self.c[r]) {
             let mut d = Vec3::ZERO;
             for k in 0..N {
                 d += x[s.idx[k] as usize] * s.w[k];
@@ -61,7 +64,9 @@ impl<const N: usize> StencilSet<N> {
             for k in 0..N {
                 f[s.idx[k] as usize] -= d * (c * s.w[k]);
             }
+            energy += 0.5 * c * d.length_squared();
         }
+        energy
     }
 
     fn add_jacobians(&self, dfdx: &mut BlockCsr) {
@@ -117,11 +122,23 @@ impl<const N: usize> Effect for StencilSet<N> {
     fn declare(&self, p: &mut PatternBuilder) {
         StencilSet::declare(self, p)
     }
+    fn position_only(&self) -> bool {
+        true
+    }
     fn add_forces(&self, s: &State, f: &mut [Vec3]) {
-        StencilSet::add_forces(self, s.x, f)
+        StencilSet::add_forces(self, s.x, f, 0, 1);
+    }
+    fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
+        StencilSet::add_forces(self, s.x, f, 0, 1)
+    }
+    fn add_forces_energy_part(&self, s: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
+        StencilSet::add_forces(self, s.x, f, part, parts)
     }
     fn add_jacobians(&self, _s: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
         StencilSet::add_jacobians(self, dfdx)
+    }
+    fn constant_jacobians(&self) -> bool {
+        true
     }
     fn energy(&self, x: &[Vec3]) -> f64 {
         StencilSet::energy(self, x)

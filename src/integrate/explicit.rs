@@ -1,6 +1,7 @@
 //! Forward Euler and symplectic (semi-implicit) Euler.
 
 use super::{scratch, Dynamics, Integrator, IntegratorStats};
+use crate::effects::State;
 use crate::Vec3;
 
 /// `x += h v(t); v += h a(t)`. First order; gains energy on any undamped oscillation, so it is here
@@ -8,7 +9,6 @@ use crate::Vec3;
 #[derive(Default)]
 pub struct ExplicitEuler {
     f: Vec<Vec3>,
-    a: Vec<Vec3>,
 }
 
 impl Integrator for ExplicitEuler {
@@ -25,11 +25,10 @@ impl Integrator for ExplicitEuler {
         v: &mut [Vec3],
     ) -> IntegratorStats {
         scratch(&mut self.f, x.len());
-        scratch(&mut self.a, x.len());
-        d.accelerations(t, x, v, &mut self.f, &mut self.a);
+        d.effects.forces(&State { t, x, v }, &mut self.f);
         for i in 0..x.len() {
             x[i] += v[i] * h;
-            v[i] += self.a[i] * h;
+            v[i] += d.acceleration(i, self.f[i]) * h;
         }
         IntegratorStats {
             force_evaluations: 1,
@@ -48,7 +47,6 @@ impl Integrator for ExplicitEuler {
 #[derive(Default)]
 pub struct SymplecticEuler {
     f: Vec<Vec3>,
-    a: Vec<Vec3>,
 }
 
 impl Integrator for SymplecticEuler {
@@ -65,10 +63,9 @@ impl Integrator for SymplecticEuler {
         v: &mut [Vec3],
     ) -> IntegratorStats {
         scratch(&mut self.f, x.len());
-        scratch(&mut self.a, x.len());
-        d.accelerations(t, x, v, &mut self.f, &mut self.a);
+        d.effects.forces(&State { t, x, v }, &mut self.f);
         for i in 0..x.len() {
-            v[i] += self.a[i] * h;
+            v[i] += d.acceleration(i, self.f[i]) * h;
             x[i] += v[i] * h;
         }
         IntegratorStats {

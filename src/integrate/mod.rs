@@ -95,8 +95,14 @@ impl Dynamics<'_> {
     pub fn accelerations(&self, t: f64, x: &[Vec3], v: &[Vec3], f: &mut [Vec3], a: &mut [Vec3]) {
         self.effects.forces(&State { t, x, v }, f);
         for i in 0..a.len() {
-            a[i] = self.constraints.filter[i].apply(f[i] / self.mass[i]);
+            a[i] = self.acceleration(i, f[i]);
         }
+    }
+
+    /// Filtered acceleration of vertex `i` under force `f`.
+    #[inline]
+    pub fn acceleration(&self, i: usize, f: Vec3) -> Vec3 {
+        self.constraints.filter[i].apply(f / self.mass[i])
     }
 }
 

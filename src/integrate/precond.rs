@@ -31,6 +31,10 @@ const COARSEST_ROWS: usize = 64;
 const DENSE_MAX_ROWS: usize = 400;
 const COARSE_SWEEPS: usize = 8;
 const MAX_LEVELS: usize = 12;
+/// Levels with this many rows or more smooth their two halves in parallel (hybrid Gauss-Seidel:
+/// Gauss-Seidel within each half, Jacobi across the cut). The split depends on the size only, so
+/// results do not depend on the number of threads.
+const PAR_SWEEP_ROWS: usize = 2048;
 
 /// Why a hierarchy could not be built; the caller falls back to block Jacobi.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -86,19 +90,16 @@ impl Csr {
         self.row_start.len().saturating_sub(1)
     }
 
+    #[inline]
     fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
         let (s, e) = (self.row_start[r], self.row_start[r + 1]);
         (&self.cols[s..e], &self.vals[s..e])
     }
 
-    #[inline]
+    #[inline(always)]
     fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
         let (cols, vals) = self.row(r);
-        let mut acc = Vec3::ZERO;
-        for (&j, &m) in cols.iter().zip(vals) {
-            acc += m * x[j as usize];
-        }
-        acc
+        row_dot(cols, vals, x)
     }
 
     /// `y = A x`.
@@ -113,6 +114,43 @@ impl Csr {
                 *yr = self.row_times(r, x);
             }
         }
+    }
+
+    /// Sorts every row by column (Galerkin products leave them in first-touch order), so that
+    /// the strictly lower and upper parts of a row are contiguous.
+    fn sort_rows(&mut self) {
+        let mut row: Vec<(u32, Mat3)> = Vec::new();
+        for r in 0..self.rows() {
+            let (s, e) = (self.row_start[r], self.row_start[r + 1]);
+            if self.cols[s..e].is_sorted() {
+                continue;
+            }
+            row.clear();
+            row.extend(
+                self.cols[s..e]
+                    .iter()
+                    .copied()
+                    .zip(self.vals[s..e].iter().copied()),
+            );
+            row.sort_unstable_by_key(|&(c, _)| c);
+            for (k, (c, m)) in row.iter().enumerate() {
+                self.cols[s + k] = *c;
+                self.vals[s + k] = *m;
+            }
+        }
+    }
+
+    /// Value index of each row's diagonal block (rows sorted by column).
+    fn diagonal_slots(&self, level: usize) -> Result<Vec<usize>, MultigridError> {
+        (0..self.rows())
+            .map(|r| {
+                let s = self.row_start[r];
+                self.cols[s..self.row_start[r + 1]]
+                    .binary_search(&(r as u32))
+                    .map(|k| s + k)
+                    .map_err(|_| MultigridError::MissingDiagonal { level, row: r })
+            })
+            .collect()
     }
 
     fn diagonal_blocks(&self, level: usize) -> Result<Vec<Mat3>, MultigridError> {
@@ -208,6 +246,22 @@ impl Csr {
         }
         out
     }
+}
+
+/// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
+#[inline(always)]
+fn row_dot(cols: &[u32], vals: &[Mat3], x: &[Vec3]) -> Vec3 {
+    row_dot_at(cols, vals, x, 0)
+}
+
+/// [`row_dot`] with `x` holding the unknowns from index `offset` on.
+#[inline(always)]
+fn row_dot_at(cols: &[u32], vals: &[Mat3], x: &[Vec3], offset: usize) -> Vec3 {
+    let mut acc = Vec3::ZERO;
+    for (&j, m) in cols.iter().zip(vals) {
+        acc += *m * x[j as usize - offset];
+    }
+    acc
 }
 
 fn frob2(m: &Mat3) -> f64 {
@@ -418,10 +472,53 @@ impl Dense {
     }
 }
 
+/// Rows `..mid` and `mid..` of a level, smoothed independently: the pre-smoother is forward
+/// Gauss-Seidel on each half's diagonal block (`L_blk`), the post-smoother backward (`L_blk^T`),
+/// so the V-cycle stays symmetric.
+#[derive(Debug, Clone)]
+struct Halves {
+    mid: usize,
+    /// Value index of the first block of each row whose column is `>= mid`.
+    split: Vec<usize>,
+    /// `x` before the backward sweep: what each half reads across the cut.
+    x_old: Vec<Vec3>,
+}
+
+impl Halves {
+    fn new(a: &Csr) -> Option<Halves> {
+        let n = a.rows();
+        if n < PAR_SWEEP_ROWS {
+            return None;
+        }
+        let mut h = Halves {
+            mid: n / 2,
+            split: Vec::with_capacity(n),
+            x_old: vec![Vec3::ZERO; n],
+        };
+        h.find_split(a);
+        Some(h)
+    }
+
+    /// Recomputes the cut positions for a matrix of the same size.
+    fn find_split(&mut self, a: &Csr) {
+        let mid = self.mid;
+        self.split.clear();
+        self.split.extend((0..a.rows()).map(|r| {
+            let (s, e) = (a.row_start[r], a.row_start[r + 1]);
+            s + a.cols[s..e].partition_point(|&c| (c as usize) < mid)
+        }));
+    }
+}
+
 #[derive(Debug, Clone)]
 struct Level {
+    /// The level's matrix, rows sorted by column.
     a: Csr,
+    /// Value index of each row's diagonal block in `a`.
+    diag: Vec<usize>,
     dinv: Vec<Mat3>,
+    /// The two halves of a large level, smoothed in parallel.
+    halves: Option<Halves>,
     /// Prolongator to this level from the next coarser one and its transpose (empty on the
     /// coarsest level).
     p: Csr,
@@ -432,12 +529,17 @@ struct Level {
 }
 
 impl Level {
-    fn new(a: Csr, level: usize) -> Result<Level, MultigridError> {
+    fn new(mut a: Csr, level: usize) -> Result<Level, MultigridError> {
         let n = a.rows();
+        a.sort_rows();
+        let diag = a.diagonal_slots(level)?;
         let dinv = invert_diagonal(&a, level)?;
+        let halves = Halves::new(&a);
         Ok(Level {
             a,
+            diag,
             dinv,
+            halves,
             p: Csr::default(),
             pt: Csr::default(),
             x: vec![Vec3::ZERO; n],
@@ -449,13 +551,11 @@ impl Level {
     /// One forward (`reverse == false`) or backward block Gauss-Seidel sweep on `A x = b`.
     fn gauss_seidel(&mut self, reverse: bool) {
         let n = self.a.rows();
+        let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
-            let (cols, vals) = self.a.row(i);
-            let mut s = self.b[i];
-            for (&j, &m) in cols.iter().zip(vals) {
-                s -= m * self.x[j as usize];
-            }
-            self.x[i] += self.dinv[i] * s;
+            let (cols, vals) = a.row(i);
+            let s = b[i] - row_dot(cols, vals, x);
+            x[i] += dinv[i] * s;
         };
         if reverse {
             (0..n).rev().for_each(&mut sweep);
@@ -463,22 +563,100 @@ impl Level {
             (0..n).for_each(&mut sweep);
         }
     }
+
+    /// The forward sweep from `x = 0`: the rows after `i` are still zero, so only the strictly
+    /// lower part contributes, `x_i = D_i^-1 (b_i - sum_{j < i} A_ij x_j)` (half the work).
+    /// With halves, the second half starts its lower part at the cut.
+    fn forward_sweep_from_zero(&mut self) {
+        let Level {
+            a,
+            diag,
+            dinv,
+            b,
+            x,
+            halves,
+            ..
+        } = self;
+        let n = a.rows();
+        // The lower part starts at the row start, or at the cut for the second half.
+        let sweep = |rows: std::ops::Range<usize>, cut: Option<&[usize]>, x: &mut [Vec3]| {
+            let offset = rows.start;
+            for i in rows {
+                let lower = cut.map_or(a.row_start[i], |c| c[i])..diag[i];
+                let s = b[i] - row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset);
+                x[i - offset] = dinv[i] * s;
+            }
+        };
+        match halves {
+            None => sweep(0..n, None, x),
+            Some(h) => {
+                let (xa, xb) = x.split_at_mut(h.mid);
+                rayon::join(
+                    || sweep(0..h.mid, None, xa),
+                    || sweep(h.mid..n, Some(&h.split), xb),
+                );
+            }
+        }
+    }
+
+    /// The post-smoother: a backward sweep, on each half separately when there are halves (the
+    /// other half's values taken from before the sweep).
+    fn backward_sweep(&mut self) {
+        let Level {
+            a,
+            dinv,
+            b,
+            x,
+            halves,
+            ..
+        } = self;
+        let Some(h) = halves else {
+            return self.gauss_seidel(true);
+        };
+        let n = a.rows();
+        h.x_old.copy_from_slice(x);
+        let (mid, split, x_old) = (h.mid, &h.split, &h.x_old);
+        let (xa, xb) = x.split_at_mut(mid);
+        // Row `i`'s own-half columns are `own(i)`, the rest read `x_old`.
+        let sweep = |rows: std::ops::Range<usize>, x: &mut [Vec3]| {
+            let offset = rows.start;
+            for i in rows.rev() {
+                let (s, e) = (a.row_start[i], a.row_start[i + 1]);
+                let (own, cross) = if offset == 0 {
+                    (s..split[i], split[i]..e)
+                } else {
+                    (split[i]..e, s..split[i])
+                };
+                let r = b[i]
+                    - row_dot_at(&a.cols[own.clone()], &a.vals[own], x, offset)
+                    - row_dot(&a.cols[cross.clone()], &a.vals[cross], x_old);
+                x[i - offset] += dinv[i] * r;
+            }
+        };
+        rayon::join(|| sweep(0..mid, xa), || sweep(mid..n, xb));
+    }
 }
 
 impl Level {
     /// `r = b - A x` right after one forward sweep from `x = 0`: row `i` was solved exactly with
     /// the rows after it still zero, so only the strictly upper part contributes,
     /// `r_i = -sum_{j > i} A_ij x_j` (half the multiplications of a full residual).
+    /// With halves, the second half's rows were solved without the columns before the cut,
+    /// which therefore join the residual.
     fn residual_after_forward_sweep(&mut self) {
+        let a = &self.a;
+        let (mid, split) = match &self.halves {
+            Some(h) => (h.mid, h.split.as_slice()),
+            None => (usize::MAX, &[][..]),
+        };
         for (i, ri) in self.r.iter_mut().enumerate() {
-            let (cols, vals) = self.a.row(i);
-            let mut acc = Vec3::ZERO;
-            for (&j, &m) in cols.iter().zip(vals) {
-                if j as usize > i {
-                    acc -= m * self.x[j as usize];
-                }
+            let upper = self.diag[i] + 1..a.row_start[i + 1];
+            let mut acc = row_dot(&a.cols[upper.clone()], &a.vals[upper], &self.x);
+            if i >= mid {
+                let cross = a.row_start[i]..split[i];
+                acc += row_dot(&a.cols[cross.clone()], &a.vals[cross], &self.x);
             }
-            *ri = acc;
+            *ri = -acc;
         }
     }
 }
@@ -554,6 +732,12 @@ impl Multigrid {
         self.levels[0].dinv.len()
     }
 
+    /// Whether the finest level smooths two halves in parallel.
+    #[cfg(test)]
+    pub fn has_parallel_halves(&self) -> bool {
+        self.levels[0].halves.is_some()
+    }
+
     /// Block rows per level, finest first.
     #[cfg(test)]
     pub fn level_sizes(&self) -> Vec<usize> {
@@ -563,10 +747,17 @@ impl Multigrid {
     /// Replaces the finest-level matrix by `a` (same size) without rebuilding the coarse levels:
     /// the smoother then sees the current matrix while the coarse correction is from the last
     /// build. Still a symmetric positive definite preconditioner.
-    pub fn refresh_finest(&mut self, a: Csr) -> Result<(), MultigridError> {
+    pub fn refresh_finest(&mut self, mut a: Csr) -> Result<(), MultigridError> {
+        a.sort_rows();
+        let diag = a.diagonal_slots(0)?;
         let dinv = invert_diagonal(&a, 0)?;
         let l0 = &mut self.levels[0];
+        match l0.halves.as_mut() {
+            Some(h) if h.x_old.len() == a.rows() => h.find_split(&a),
+            _ => l0.halves = Halves::new(&a),
+        }
         l0.a = a;
+        l0.diag = diag;
         l0.dinv = dinv;
         Ok(())
     }
@@ -588,11 +779,11 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
     let Some((l, rest)) = levels.split_first_mut() else {
         return;
     };
-    l.x.iter_mut().for_each(|x| *x = Vec3::ZERO);
     if rest.is_empty() {
         match dense {
             Some(d) => d.solve(&l.b, &mut l.x, tmp),
             None => {
+                l.x.iter_mut().for_each(|x| *x = Vec3::ZERO);
                 for _ in 0..COARSE_SWEEPS {
                     l.gauss_seidel(false);
                     l.gauss_seidel(true);
@@ -601,7 +792,7 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         }
         return;
     }
-    l.gauss_seidel(false);
+    l.forward_sweep_from_zero();
     l.residual_after_forward_sweep();
     l.pt.mul(&l.r, &mut rest[0].b);
     cycle(rest, dense, tmp);
@@ -609,5 +800,5 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
     for (xi, ci) in l.x.iter_mut().zip(&l.r) {
         *xi += *ci;
     }
-    l.gauss_seidel(true);
+    l.backward_sweep();
 }

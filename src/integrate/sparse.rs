@@ -61,6 +61,7 @@ impl PatternBuilder {
             row_start,
             cols,
             diag,
+            zero: true,
         }
     }
 }
@@ -72,6 +73,9 @@ pub struct BlockCsr {
     cols: Vec<u32>,
     diag: Vec<usize>,
     vals: Vec<Mat3>,
+    /// No value was added since the last clear, so every block is zero: lets the solver skip
+    /// clearing, copying and combining empty matrices (df/dv of a scene without damping).
+    zero: bool,
 }
 
 impl BlockCsr {
@@ -101,14 +105,31 @@ impl BlockCsr {
     pub fn add(&mut self, i: u32, j: u32, m: Mat3) {
         let s = self.slot(i, j);
         self.vals[s] += m;
+        self.zero = false;
     }
 
     #[inline]
     pub fn add_at(&mut self, slot: usize, m: Mat3) {
         self.vals[slot] += m;
+        self.zero = false;
+    }
+
+    /// True when every block is zero (nothing added since the last clear).
+    pub fn is_zero(&self) -> bool {
+        self.zero
+    }
+
+    /// Copies the values of `other`, which has the same pattern.
+    pub fn assign(&mut self, other: &BlockCsr) {
+        debug_assert_eq!(self.cols.len(), other.cols.len());
+        if !(self.zero && other.zero) {
+            self.vals.copy_from_slice(&other.vals);
+        }
+        self.zero = other.zero;
     }
 
     /// Column indices and blocks of row `r` (read-only view for preconditioners).
+    #[inline]
     pub fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
         let (s, e) = (self.row_start[r], self.row_start[r + 1]);
         (&self.cols[s..e], &self.vals[s..e])
@@ -119,14 +140,22 @@ impl BlockCsr {
     }
 
     pub fn clear(&mut self) {
-        self.vals.iter_mut().for_each(|v| *v = Mat3::ZERO);
+        if !self.zero {
+            self.vals.iter_mut().for_each(|v| *v = Mat3::ZERO);
+        }
+        self.zero = true;
     }
 
     /// Sets `self = a * self + b * other` (same pattern).
     pub fn axpby(&mut self, a: f64, b: f64, other: &BlockCsr) {
         debug_assert_eq!(self.cols.len(), other.cols.len());
-        for (s, o) in self.vals.iter_mut().zip(&other.vals) {
-            *s = *s * a + *o * b;
+        if other.zero {
+            self.vals.iter_mut().for_each(|s| *s *= a);
+        } else {
+            for (s, o) in self.vals.iter_mut().zip(&other.vals) {
+                *s = *s * a + *o * b;
+            }
+            self.zero = false;
         }
     }
 
@@ -135,12 +164,15 @@ impl BlockCsr {
         for (i, &di) in d.iter().enumerate() {
             self.vals[self.diag[i]] += Mat3::from_diagonal(Vec3::splat(di));
         }
+        self.zero = false;
     }
 
+    #[inline(always)]
     fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
+        let (cols, vals) = self.row(r);
         let mut acc = Vec3::ZERO;
-        for k in self.row_start[r]..self.row_start[r + 1] {
-            acc += self.vals[k] * x[self.cols[k] as usize];
+        for (&j, m) in cols.iter().zip(vals) {
+            acc += *m * x[j as usize];
         }
         acc
     }

@@ -3,9 +3,14 @@
 //! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way:
 //! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
 //! 2. effects give forces and the integrator advances the state;
-//! 3. the guard checks the result (and subdivides or stops per policy);
-//! 4. collisions and constraints fix the new state;
-//! 5. metrics are recorded.
+//! 3. kinematic vertices are put exactly on their end-of-substep targets;
+//! 4. the guard checks the result (and subdivides or stops per policy);
+//! 5. collisions fix the new state;
+//! 6. metrics are recorded.
+//!
+//! The guard's energy pass at the new state also computes the position-only forces there, which
+//! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
+//! guarded explicit substep costs one pass over the effects.
 
 mod guard;
 
@@ -52,6 +57,26 @@ pub struct StepMetrics {
     pub collision_time_s: f64,
     /// Obstacles skipped by the collision stage as far from the cloth (last substep).
     pub culled_obstacles: usize,
+}
+
+/// Energies of a state: kinetic (free vertices), elastic and gravitational potential.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Energies {
+    kinetic: f64,
+    elastic: f64,
+    gravity: f64,
+}
+
+impl Energies {
+    /// Kinetic plus every potential.
+    fn total(&self) -> f64 {
+        self.kinetic + self.elastic + self.gravity
+    }
+
+    /// Kinetic plus elastic: the total without the gravity potential, so never negative.
+    fn dynamic(&self) -> f64 {
+        self.kinetic + self.elastic
+    }
 }
 
 /// Moving frames that kinematic vertices attach to. A frame step moves each frame from `start`
@@ -123,7 +148,7 @@ pub struct Simulation {
     constraints: Constraints,
     time: f64,
     /// Energy of the current state, if known (saves one evaluation per substep).
-    energy_cache: Option<(f64, f64)>,
+    energy_cache: Option<Energies>,
     /// Dynamic energy of the last substeps: the guard's reference level, so that the bounded
     /// energy oscillation of a stable symplectic step is not mistaken for a blow-up.
     recent_energy: [f64; 16],
@@ -374,11 +399,20 @@ impl Simulation {
             *t = None;
         }
         self.time = t0 + self.settings.dt;
-        let (ke, pe) = self.energy();
+        let (ke, pe) = match self.energy_cache {
+            Some(e) => (e.kinetic, e.elastic + e.gravity),
+            None => self.energy(),
+        };
         m.time = self.time;
         m.kinetic_energy = ke;
         m.potential_energy = pe;
-        m.max_speed = self.cloth.v.iter().map(|v| v.length()).fold(0.0, f64::max);
+        m.max_speed = self
+            .cloth
+            .v
+            .iter()
+            .map(|v| v.length_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
         m.wall_time_s = wall.elapsed().as_secs_f64();
         self.last = m;
         Ok(&self.last)
@@ -422,6 +456,7 @@ impl Simulation {
             Some(e) => e,
             None => self.energies(),
         };
+        let (e0_total, e0_dynamic) = (e0.total(), e0.dynamic());
         let external = self.external_work_rate(t);
         self.x_save.clone_from(&self.cloth.x);
         self.v_save.clone_from(&self.cloth.v);
@@ -440,16 +475,21 @@ impl Simulation {
         m.cg_iterations += stats.cg_iterations;
         m.cg_residual_max = m.cg_residual_max.max(stats.cg_residual);
 
-        // 3. Guard.
+        // 3. Constraints: kinematic vertices end exactly on target (no drift from round-off).
+        for (i, k) in &self.cloth.kinematic {
+            self.cloth.x[*i as usize] = self.target(k, s1);
+        }
+
+        // 4. Guard.
         match self.check(h, e0, external.then_some(self.fext.as_slice())) {
             Ok((e1, spent)) => {
                 if self.energy_budget.is_none() {
-                    self.budget_scale = e0.1;
+                    self.budget_scale = e0_dynamic;
                 }
-                self.energy_budget = Some(self.energy_budget.unwrap_or(e0.0) + spent);
+                self.energy_budget = Some(self.energy_budget.unwrap_or(e0_total) + spent);
                 self.budget_scale += spent;
                 self.energy_cache = Some(e1);
-                self.recent_energy[self.substep_count % 16] = e1.1;
+                self.recent_energy[self.substep_count % 16] = e1.dynamic();
                 self.substep_count += 1;
             }
             Err((vertex, symptom)) => {
@@ -465,11 +505,6 @@ impl Simulation {
                 }
                 return Err(Box::new(self.divergence_error(t, h, vertex, symptom)));
             }
-        }
-
-        // 4. Constraints: kinematic vertices end exactly on target (no drift from round-off).
-        for (i, k) in &self.cloth.kinematic {
-            self.cloth.x[*i as usize] = self.target(k, s1);
         }
 
         // 5. Collisions: obstacles move over the substep, then contacts are resolved.
@@ -505,7 +540,7 @@ impl Simulation {
             // A moving obstacle can push energy into the cloth: widen the guard's budget by it.
             let after = self.energies();
             if let (Some(b), Some(budget)) = (before, self.energy_budget.as_mut()) {
-                *budget += (after.0 - b.0).max(0.0);
+                *budget += (after.total() - b.total()).max(0.0);
             }
             self.energy_cache = Some(after);
         }
@@ -576,12 +611,14 @@ impl Simulation {
         true
     }
 
-    /// (total energy, dynamic energy): total = kinetic + every potential; dynamic = kinetic + elastic
-    /// (total without the gravity potential, so it is never negative).
-    fn energies(&self) -> (f64, f64) {
+    /// Energies of the current state (and the position-only forces there, for the next substep).
+    fn energies(&self) -> Energies {
         let (elastic, gravity) = self.effects.energy_split(&self.cloth.x);
-        let ke = self.kinetic_energy();
-        (ke + elastic + gravity, ke + elastic)
+        Energies {
+            kinetic: self.kinetic_energy(),
+            elastic,
+            gravity,
+        }
     }
 
     /// Checks the integrator's output; returns the new energies or the first bad vertex.
@@ -590,30 +627,44 @@ impl Simulation {
     /// vertices, plus `energy_growth` times the recent peak dynamic energy, plus the first-order
     /// error an explicit step makes under gravity (`h sum m |g| |v|`). An instability multiplies the
     /// dynamic energy every step and trips this within a few steps; a stable step never comes close.
-    #[allow(clippy::type_complexity)]
     fn check(
         &self,
         h: f64,
-        e0: (f64, f64),
+        e0: Energies,
         fext: Option<&[Vec3]>,
-    ) -> Result<((f64, f64), f64), (usize, Symptom)> {
+    ) -> Result<(Energies, f64), (usize, Symptom)> {
         let c = &self.cloth;
         let g = &self.settings.guard;
+        // One pass over the vertices: finiteness, the fastest vertex, the kinetic energy and the
+        // speed sum of the gravity error bound.
+        let (mut fastest, mut speed2, mut kinetic, mut mass_speed) = (0, 0.0, 0.0, 0.0);
         for i in 0..c.len() {
-            if !c.x[i].is_finite() || !c.v[i].is_finite() {
+            let (v, m) = (c.v[i], c.mass[i]);
+            if !c.x[i].is_finite() || !v.is_finite() {
                 return Err((i, Symptom::NonFinite));
             }
+            let v2 = v.length_squared();
+            if v2 > speed2 {
+                (fastest, speed2) = (i, v2);
+            }
+            kinetic += 0.5 * m * v2;
+            mass_speed += m * v2.max(self.v_save[i].length_squared()).sqrt();
         }
-        let (fastest, speed) =
-            c.v.iter()
-                .map(|v| v.length())
-                .enumerate()
-                .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let speed = speed2.sqrt();
         if speed > g.max_speed {
             return Err((fastest, Symptom::Speed(speed)));
         }
-        let e1 = self.energies();
-        if !e1.0.is_finite() {
+        for (i, _) in &c.kinematic {
+            kinetic -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
+        }
+        let (elastic, gravity_energy) = self.effects.energy_split(&c.x);
+        let e1 = Energies {
+            kinetic,
+            elastic,
+            gravity: gravity_energy,
+        };
+        let (e0_total, e0_dynamic, e1_total) = (e0.total(), e0.dynamic(), e1.total());
+        if !e1_total.is_finite() {
             return Err((fastest, Symptom::NonFinite));
         }
         let work: f64 = match fext {
@@ -623,27 +674,23 @@ impl Simulation {
             None => 0.0,
         };
         let gravity = self.effects.gravity().length();
-        let gravity_error: f64 = h
-            * gravity
-            * (0..c.len())
-                .map(|i| c.mass[i] * c.v[i].length().max(self.v_save[i].length()))
-                .sum::<f64>();
+        let gravity_error = h * gravity * mass_speed;
         let total_mass: f64 = c.mass.iter().sum();
         let floor = 1e-12 * (1.0 + total_mass);
-        let reference = self.recent_energy.iter().fold(e0.1, |a, &b| a.max(b));
+        let reference = self.recent_energy.iter().fold(e0_dynamic, |a, &b| a.max(b));
         let allowed = work + g.energy_growth * reference + gravity_error + floor;
-        let gained = e1.0 - e0.0;
+        let gained = e1_total - e0_total;
         if gained > allowed {
             return Err((fastest, Symptom::EnergyGain { gained, allowed }));
         }
         let spent = work + gravity_error + floor;
-        let budget = self.energy_budget.unwrap_or(e0.0) + spent;
+        let budget = self.energy_budget.unwrap_or(e0_total) + spent;
         let scale = if self.energy_budget.is_some() {
             self.budget_scale
         } else {
-            e0.1
+            e0_dynamic
         } + spent;
-        let over = e1.0 - budget;
+        let over = e1_total - budget;
         if over > g.energy_growth * scale + floor {
             return Err((
                 fastest,
