@@ -1,0 +1,57 @@
+//! The hard-case catalogue (`src/hard/`) at CI resolution: every case must meet its criteria.
+//! Full resolution: `cargo test --release --test hard_cases -- --ignored`.
+
+use drape::hard::{catalogue, run_case, Outcome, Resolution};
+
+fn run(name: &str, res: Resolution) -> Outcome {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no hard case {name}"));
+    let case = build(res).unwrap_or_else(|e| panic!("{e}"));
+    let o = run_case(case);
+    eprintln!("{name}: {:?}", o.worst);
+    o
+}
+
+fn check(name: &str, res: Resolution) {
+    let o = run(name, res);
+    assert!(o.passed(), "{name}: {}", o.failures.join("; "));
+}
+
+macro_rules! cases {
+    ($($name:ident),* $(,)?) => {
+        mod ci {
+            $( #[test] fn $name() { super::check(stringify!($name), super::Resolution::Ci); } )*
+        }
+        mod full {
+            $( #[test] #[ignore = "full resolution: minutes"] fn $name() {
+                super::check(stringify!($name), super::Resolution::Full);
+            } )*
+        }
+    };
+}
+
+cases!(
+    stiff_implicit,
+    stiff_explicit_near_limit,
+    stiff_explicit_over_limit,
+    light_cloth,
+    heavy_cloth,
+    tiny_cloth,
+    huge_cloth,
+    impact_20_m_s,
+    robot_swing_at_velocity_limit,
+    pinch_below_thickness,
+    crumple_heap,
+    degenerate_mesh,
+    pinned_inside_obstacle,
+    wind_50_m_s,
+    long_run_10_min,
+);
+
+#[test]
+fn every_catalogued_case_has_a_test() {
+    let names: Vec<&str> = catalogue().iter().map(|(n, _)| *n).collect();
+    assert_eq!(names.len(), 15, "{names:?}: add the new case to cases!()");
+}
