@@ -31,7 +31,8 @@ pub enum EnergyCheck {
     /// `M g L` (cloth mass, gravity, cloth size).
     Bounded { margin: f64 },
     /// Obstacles push the cloth and their work is not observable from outside the collision
-    /// stage: the bound is on speed instead (see [`Criteria::max_speed`]).
+    /// stage: the excess is reported but the bound is on speed instead (see
+    /// [`Criteria::max_speed`]).
     NotMeasured,
 }
 

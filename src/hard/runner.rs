@@ -123,7 +123,6 @@ pub fn run_case(case: Case) -> Outcome {
     let wall = Instant::now();
     let dt = sim.settings.dt;
     let frames = (duration / dt).round().max(1.0) as usize;
-    let measure_energy = matches!(criteria.energy, EnergyCheck::Bounded { .. });
     let mut w = Worst {
         all_finite: true,
         ..Worst::default()
@@ -141,10 +140,9 @@ pub fn run_case(case: Case) -> Outcome {
     let (mut f0, mut f1, mut scratch) = (Vec::new(), Vec::new(), Vec::new());
     let mut x0 = Vec::new();
     for frame in 0..frames {
-        if measure_energy {
-            external_forces(&sim, &mut f0, &mut scratch);
-            x0.clone_from(&sim.cloth.x);
-        }
+        // Energy is always measured and reported; it is judged only where the case says so.
+        external_forces(&sim, &mut f0, &mut scratch);
+        x0.clone_from(&sim.cloth.x);
         if let Some(d) = driver.as_mut() {
             let t = sim.time() + dt;
             d.advance(&mut sim, t);
@@ -173,25 +171,23 @@ pub fn run_case(case: Case) -> Outcome {
         w.max_attached_drift = w.max_attached_drift.max(attached_drift(&sim));
         let e = m.kinetic_energy + m.potential_energy;
         energies.push(e);
-        if measure_energy {
-            external_forces(&sim, &mut f1, &mut scratch);
-            let dw: f64 = (0..c.len())
-                .map(|i| 0.5 * (f0[i] + f1[i]).dot(c.x[i] - x0[i]))
-                .sum();
-            work += dw;
-            gross_work += dw.abs();
-            if frame + 1 == criteria.energy_from_frame {
-                (e_start, work) = (e, 0.0);
-            }
-            if e - e_start - work > excess {
-                excess = e - e_start - work;
-                w.energy_excess_at = sim.time();
-            }
+        external_forces(&sim, &mut f1, &mut scratch);
+        let dw: f64 = (0..c.len())
+            .map(|i| 0.5 * (f0[i] + f1[i]).dot(c.x[i] - x0[i]))
+            .sum();
+        work += dw;
+        gross_work += dw.abs();
+        if frame + 1 == criteria.energy_from_frame {
+            (e_start, work) = (e, 0.0);
+        }
+        if e - e_start - work > excess {
+            excess = e - e_start - work;
+            w.energy_excess_at = sim.time();
         }
     }
     w.simulated_s = sim.time();
     w.energy_scale = dynamic0.max(gross_work).max(gravity0);
-    if measure_energy && excess.is_finite() && w.energy_scale > 0.0 {
+    if excess.is_finite() && w.energy_scale > 0.0 {
         w.energy_excess = Some(excess / w.energy_scale);
     }
     if criteria.max_energy_creep.is_some() && energies.len() >= 20 {
