@@ -167,8 +167,16 @@ fn head_stl() -> Vec<u8> {
     std::fs::read(root().join("urdf/meshes/head.stl")).expect("bundled STL")
 }
 
+/// Case count: the bounded default, or `PROPTEST_CASES` for a longer run.
+fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(256), ..ProptestConfig::default() })]
 
     #[test]
     fn binary_stl(e in edits()) {
@@ -235,4 +243,36 @@ proptest! {
             Err(err) => prop_assert!(err.to_string().contains(which), "{}", err),
         }
     }
+}
+
+/// Found by the fuzzer: two joint origins of 1e308 m are finite, but forward kinematics adds
+/// them to infinity. Lengths beyond 1e6 m are now rejected, naming the joint or link.
+#[test]
+fn overflowing_urdf_lengths_are_rejected() {
+    let options = UrdfOptions {
+        use_ros_env: false,
+        ..Default::default()
+    };
+    let urdf = |origin: &str, radius: &str| {
+        format!(
+            r#"<robot name="r"><link name="a"/><link name="b"><collision><geometry>
+            <sphere radius="{radius}"/></geometry></collision></link><link name="c"/>
+            <joint name="j1" type="fixed"><parent link="a"/><child link="b"/><origin xyz="{origin}"/></joint>
+            <joint name="j2" type="fixed"><parent link="b"/><child link="c"/><origin xyz="{origin}"/></joint>
+            </robot>"#
+        )
+    };
+    let ok = Robot::from_urdf_str(&urdf("0 0 1", "0.1"), None, &options).expect("plausible robot");
+    assert!(ok
+        .link_poses(&ok.zero_positions())
+        .iter()
+        .all(|p| p.is_finite()));
+    let err = Robot::from_urdf_str(&urdf("0 0 1e308", "0.1"), None, &options)
+        .expect_err("1e308 m origins overflow forward kinematics")
+        .to_string();
+    assert!(err.contains("j1") && err.contains("origin"), "{err}");
+    let err = Robot::from_urdf_str(&urdf("0 0 1", "1e308"), None, &options)
+        .expect_err("a 1e308 m sphere is no robot part")
+        .to_string();
+    assert!(err.contains("link `b`") && err.contains("radius"), "{err}");
 }

@@ -21,6 +21,7 @@ fn check(name: &str, res: Resolution) {
 
 macro_rules! cases {
     ($($name:ident),* $(,)?) => {
+        const TESTED: &[&str] = &[$(stringify!($name)),*];
         mod ci {
             $( #[test] fn $name() { super::check(stringify!($name), super::Resolution::Ci); } )*
         }
@@ -53,5 +54,22 @@ cases!(
 #[test]
 fn every_catalogued_case_has_a_test() {
     let names: Vec<&str> = catalogue().iter().map(|(n, _)| *n).collect();
-    assert_eq!(names.len(), 15, "{names:?}: add the new case to cases!()");
+    assert_eq!(
+        names, TESTED,
+        "catalogue and cases!() must list the same cases"
+    );
+}
+
+/// The summary command's Markdown lists every case with its verdict and worst values.
+#[test]
+fn summary_lists_every_case() {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == "tiny_cloth")
+        .expect("tiny_cloth is catalogued");
+    let o = run_case(build(Resolution::Ci).expect("builds"));
+    let md = drape::hard::markdown(std::slice::from_ref(&o), Resolution::Ci);
+    assert!(md.contains("| tiny_cloth | yes |"), "{md}");
+    assert!(md.contains("### tiny_cloth"), "{md}");
+    assert!(md.contains("1 of 1 cases pass"), "{md}");
 }

@@ -87,8 +87,16 @@ fn stream() -> impl Strategy<Value = Vec<(u64, JointInput)>> {
     prop::collection::vec(prop_oneof![message(), good_message()], 0..40)
 }
 
+/// Case count: the bounded default, or `PROPTEST_CASES` for a longer run.
+fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(200), ..ProptestConfig::default() })]
 
     #[test]
     fn random_joint_streams_never_give_non_finite_link_poses(
@@ -124,7 +132,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(6), ..ProptestConfig::default() })]
 
     /// The whole pipeline: a random stream drives the towel scene's robot; the cloth stays finite.
     #[test]

@@ -48,8 +48,16 @@ fn policy() -> impl Strategy<Value = DivergencePolicy> {
     prop::sample::select(vec![DivergencePolicy::Subdivide, DivergencePolicy::Stop])
 }
 
+/// Case count: the bounded default, or `PROPTEST_CASES` for a longer run.
+fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(48), ..ProptestConfig::default() })]
 
     #[test]
     fn random_materials_run_finite_or_stop_with_the_documented_error(

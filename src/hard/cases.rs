@@ -390,6 +390,9 @@ collision: { mode: continuous }
     // times that, nor further than the table.
     let mut criteria = Criteria::base(1.0, 2.0);
     criteria.energy = EnergyCheck::NotMeasured;
+    // The two thickness layers overlap: pushed out of one, a vertex ends at most
+    // `thickness - gap` inside the other, i.e. `2 thickness - gap` = 8.5 mm into its layer.
+    criteria.max_penetration = Some(2.0 * 0.005 - 0.0015 + 1e-9);
     Ok(Case {
         name: "pinch_below_thickness",
         description:
