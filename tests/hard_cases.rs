@@ -73,3 +73,33 @@ fn summary_lists_every_case() {
     assert!(md.contains("### tiny_cloth"), "{md}");
     assert!(md.contains("1 of 1 cases pass"), "{md}");
 }
+
+/// The robot case really swings at the URDF velocity limits, not below or above them.
+#[test]
+fn robot_swing_moves_at_the_joint_velocity_limits() {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == "robot_swing_at_velocity_limit")
+        .expect("catalogued");
+    let case = build(Resolution::Ci).expect("builds");
+    let d = case.driver.expect("the case has a robot");
+    let kin = d.robot().kinematics();
+    for name in ["right_shoulder_pitch", "right_wrist"] {
+        let ji = kin.joint_index(name).expect("joint exists");
+        let limit = kin.joints()[ji].velocity_limit.expect("URDF gives a limit");
+        let h = 1e-3;
+        let fastest = (0..3000)
+            .map(|k| {
+                let t = k as f64 * h;
+                let (a, _) = kin.effective_position(&d.positions_at(t), ji);
+                let (b, _) = kin.effective_position(&d.positions_at(t + h), ji);
+                ((b - a) / h).abs()
+            })
+            .fold(0.0, f64::max);
+        // Piecewise-linear motion: the finite difference is exact except across a knot.
+        assert!(
+            (fastest - limit).abs() < 1e-6 * limit,
+            "{name}: {fastest} rad/s vs limit {limit}"
+        );
+    }
+}
