@@ -84,6 +84,11 @@ proptest! {
                     let msg = e.to_string();
                     prop_assert!(msg.contains("cloth 'sheet'"), "{}", msg);
                     prop_assert!(e.vertex < sim.cloth.len());
+                    // Advice fits the run: an implicit run is not told to switch to implicit.
+                    prop_assert!(
+                        e.integrator != "implicit" || !msg.contains("use the implicit integrator"),
+                        "{}", msg
+                    );
                     prop_assert!(sim.cloth.x.iter().chain(&sim.cloth.v).all(|p| p.is_finite()));
                     break;
                 }
