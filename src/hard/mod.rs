@@ -27,8 +27,8 @@ pub enum Resolution {
 pub enum EnergyCheck {
     /// `E(t) <= E(0) + W_ext(t) + margin * scale`, with `W_ext` the work of wind and of driven
     /// (pinned/attached) vertices, integrated by the trapezoid rule per frame; `scale` is the
-    /// largest of the initial dynamic energy, the gross external work and the gravity scale
-    /// `M g L` (cloth mass, gravity, cloth size).
+    /// larger of the peak dynamic energy (kinetic + elastic) over the run and the gravity scale
+    /// `M g L` (cloth mass, gravity, initial cloth size).
     Bounded { margin: f64 },
     /// Obstacles push the cloth and their work is not observable from outside the collision
     /// stage: the excess is reported but the bound is on speed instead (see

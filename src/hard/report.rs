@@ -23,7 +23,8 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
     let _ = writeln!(
         s,
         "Worst values over every frame. Energy excess: `max_t (E(t) - E(0) - W_ext(t)) / scale` \
-         (negative: the cloth only lost energy; `-` where obstacles do unmeasured work). Drift: \
+         (negative: the cloth only lost energy; in parentheses where obstacles or contact corrections do \
+         work that is not measured: reported, not judged). Drift: \
          distance of pinned/attached vertices from their targets. Creep: change of mean energy \
          between the second and the last tenth of the run, over `M g L`.\n"
     );
@@ -47,8 +48,11 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
             w.frames,
             w.max_abs_x,
             w.max_speed,
-            w.energy_excess
-                .map_or_else(|| "-".to_string(), |e| format!("{e:.2e}")),
+            match (w.energy_excess, o.criteria.energy) {
+                (None, _) => "-".to_string(),
+                (Some(e), EnergyCheck::Bounded { .. }) => format!("{e:.2e}"),
+                (Some(e), EnergyCheck::NotMeasured) => format!("({e:.2e})"),
+            },
             w.max_penetration,
             opt(w.max_self_intersections),
             w.max_attached_drift,

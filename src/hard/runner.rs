@@ -134,7 +134,7 @@ pub fn run_case(case: Case) -> Outcome {
     let dynamic0 = sim.energy().0 + sim.effects().energy_split(&sim.cloth.x).0;
     let gravity0 = gravity_scale(&sim);
     let mut work = 0.0;
-    let mut gross_work = 0.0;
+    let mut peak_dynamic = dynamic0;
     let mut excess = f64::NEG_INFINITY;
     let mut energies = Vec::with_capacity(frames);
     let (mut f0, mut f1, mut scratch) = (Vec::new(), Vec::new(), Vec::new());
@@ -176,7 +176,7 @@ pub fn run_case(case: Case) -> Outcome {
             .map(|i| 0.5 * (f0[i] + f1[i]).dot(c.x[i] - x0[i]))
             .sum();
         work += dw;
-        gross_work += dw.abs();
+        peak_dynamic = peak_dynamic.max(m.kinetic_energy + sim.effects().energy_split(&c.x).0);
         if frame + 1 == criteria.energy_from_frame {
             (e_start, work) = (e, 0.0);
         }
@@ -186,7 +186,7 @@ pub fn run_case(case: Case) -> Outcome {
         }
     }
     w.simulated_s = sim.time();
-    w.energy_scale = dynamic0.max(gross_work).max(gravity0);
+    w.energy_scale = peak_dynamic.max(gravity0);
     if excess.is_finite() && w.energy_scale > 0.0 {
         w.energy_excess = Some(excess / w.energy_scale);
     }
