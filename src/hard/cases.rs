@@ -304,8 +304,10 @@ collision: { mode: continuous }
 
 fn robot_swing(res: Resolution) -> Result<Case, HardError> {
     // right_shoulder_pitch is limited to 2.0 rad/s and right_wrist to 3.0 rad/s (drape_bot.urdf):
-    // both swing at exactly their limit (wrist 0 -> 2.9 rad, its position limit, in 0.9667 s;
-    // shoulder 1.9333 rad in the same time) after the cloth has settled on the arm for 1 s.
+    // both swing at exactly their limit (shoulder 1 rad down, wrist 1.5 rad, in 0.5 s, and back)
+    // after the cloth has settled on the arm for 1 s. The arm stays clear of the torso and base:
+    // swung all the way down (pitch 0.36) the hand passes the base and pinches the sheet
+    // between two links, which no contact response can resolve (see the report).
     let text = fill(
         r#"
 effects: [gravity, stretch, shear, bending, damping]
@@ -329,8 +331,10 @@ robot:
     points:
       - { t: 0.0, positions: [-1.57, 0.0] }
       - { t: 1.0, positions: [-1.57, 0.0] }
-      - { t: 1.9666666666666667, positions: [0.36333333333333334, 2.9] }
-      - { t: 2.9333333333333333, positions: [-1.57, 0.0] }
+      - { t: 1.5, positions: [-0.57, 1.5] }
+      - { t: 2.0, positions: [-1.57, 0.0] }
+obstacles:
+  - { name: floor, shape: { type: plane, normal: [0.0, 0.0, 1.0] } }
 collision: { mode: continuous }
 "#,
         &[("RES", pick(res, 12, 22).to_string())],
@@ -341,9 +345,10 @@ collision: { mode: continuous }
         .build_with_robot()
         .map_err(|source| HardError::Scene { case: name, source })?;
     // The hand is at most ~0.75 m from the shoulder: 2 rad/s gives 1.5 m/s at the hand, and the
-    // wrist adds 3 rad/s over the ~0.1 m hand. Cloth flung off may fall freely for the rest of
-    // the run (3 s: 30 m/s); the bound takes 3x the link speed plus that fall.
-    let mut criteria = Criteria::base(5.0, 3.0 * 1.8 + G * 3.0);
+    // wrist adds 3 rad/s over the ~0.1 m hand. Cloth flung off falls at most 1 m to the floor
+    // (sqrt(2 g) = 4.4 m/s); the bound takes 3x the link speed plus that fall. Everything stays
+    // within the arm's reach (~1 m) plus the sheet's diagonal (0.62 m) of the root.
+    let mut criteria = Criteria::base(2.0, 3.0 * 1.8 + (2.0 * G).sqrt());
     criteria.energy = EnergyCheck::NotMeasured;
     criteria.max_penetration = Some(0.008);
     Ok(Case {
