@@ -12,6 +12,7 @@ pub mod cloth;
 pub mod collide;
 pub mod effects;
 pub mod garment;
+pub mod hard;
 pub mod integrate;
 pub mod mesh;
 pub mod pose;

@@ -144,3 +144,54 @@ fn unwritable_output_is_a_clear_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/nonexistent-dir/x.mcap"), "{err}");
 }
+
+/// A full disk: `/dev/full` fails every write, and (when this process may mount, as root in CI) a
+/// 64 KiB tmpfs fills up mid-run. Both must end with a non-zero exit and an error that names the
+/// output file and the cause, not a panic.
+#[cfg(target_os = "linux")]
+#[test]
+fn full_disk_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = short_scene(dir.path());
+    let record = |out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_drape"))
+            .args(["record", "--quiet", "--duration", "5", "--scene"])
+            .arg(&scene_path)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let check = |out: &Path, o: std::process::Output| {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{}: recorder succeeded", out.display());
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains(&out.display().to_string()), "{err}");
+        assert!(err.contains("No space left on device"), "{err}");
+    };
+    let dev_full = Path::new("/dev/full");
+    check(dev_full, record(dev_full));
+
+    let mnt = dir.path().join("tiny");
+    std::fs::create_dir(&mnt).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"])
+        .arg(&mnt)
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("cannot mount a tmpfs here (not root?): only /dev/full was checked");
+        return;
+    }
+    /// Unmounts even when an assertion fails.
+    struct Unmount<'a>(&'a Path);
+    impl Drop for Unmount<'_> {
+        fn drop(&mut self) {
+            let _ = Command::new("umount").arg(self.0).status();
+        }
+    }
+    let _guard = Unmount(&mnt);
+    let out = mnt.join("bag.mcap");
+    check(&out, record(&out));
+}

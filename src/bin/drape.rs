@@ -60,6 +60,15 @@ enum Command {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         ros_args: Vec<String>,
     },
+    /// Run the hard-case catalogue and write its Markdown summary of worst values.
+    HardCases {
+        /// Full resolution and duration (minutes) instead of the CI variants (seconds).
+        #[arg(long)]
+        full: bool,
+        /// Output Markdown file, e.g. docs/hard_cases.md.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Parse and validate a scene, and print what it builds.
     Check {
         #[arg(long)]
@@ -95,6 +104,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Study { quick, out } => study(quick, out),
         #[cfg(feature = "ros")]
         Command::Node { params, ros_args } => node(params, ros_args),
+        Command::HardCases { full, out } => hard_cases(full, out),
         Command::Check { scene } => {
             let s = drape::scene::Scene::load(&scene)?;
             let sim = s.build()?;
@@ -111,6 +121,48 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// Runs every hard case, writes the summary, and fails if any case failed its criteria.
+fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
+    use drape::hard::{catalogue, markdown, run_case, Resolution};
+    let res = if full {
+        Resolution::Full
+    } else {
+        Resolution::Ci
+    };
+    let mut outcomes = Vec::new();
+    for (name, build) in catalogue() {
+        let o = run_case(build(res)?);
+        log::info!(
+            "{name}: {} in {:.1} s{}",
+            if o.passed() { "pass" } else { "FAIL" },
+            o.worst.wall_s,
+            if o.passed() {
+                String::new()
+            } else {
+                format!(" ({})", o.failures.join("; "))
+            }
+        );
+        outcomes.push(o);
+    }
+    std::fs::write(&out, markdown(&outcomes, res))
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", out.display()))?;
+    let failed: Vec<&str> = outcomes
+        .iter()
+        .filter(|o| !o.passed())
+        .map(|o| o.name)
+        .collect();
+    println!(
+        "{}: {} of {} hard cases pass",
+        out.display(),
+        outcomes.len() - failed.len(),
+        outcomes.len()
+    );
+    if !failed.is_empty() {
+        anyhow::bail!("hard cases failed: {}", failed.join(", "));
+    }
+    Ok(())
 }
 
 fn study(quick: bool, out: PathBuf) -> Result<()> {

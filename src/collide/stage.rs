@@ -309,6 +309,57 @@ impl CollisionStage {
         }
     }
 
+    /// A vertex touching two obstacles whose surfaces face each other closer than twice its
+    /// thickness cannot be `thickness` away from both: projected out of one layer after the
+    /// other, it ended inside the first obstacle's solid, and alternating projections step after
+    /// step pumped energy into its springs. Put it midway between the two surfaces instead, with
+    /// the normal velocity of their mean.
+    fn center_pinched(&self, x0: &[Vec3], x1: &mut [Vec3], v1: &mut [Vec3], n: usize) {
+        let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
+            .contacts
+            .iter()
+            .map(|c| (c.vertex, c.obstacle, c.normal, c.surface_velocity))
+            .collect();
+        by_vertex.sort_by_key(|c| c.0);
+        for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0 as usize;
+            if group.len() < 2 || i >= n {
+                continue;
+            }
+            // The most opposed pair of contact normals.
+            let mut best: Option<(f64, usize, usize)> = None;
+            for a in 0..group.len() {
+                for b in a + 1..group.len() {
+                    let d = group[a].2.dot(group[b].2);
+                    if d < -0.5 && best.is_none_or(|(bd, _, _)| d < bd) {
+                        best = Some((d, a, b));
+                    }
+                }
+            }
+            let Some((_, a, b)) = best else { continue };
+            let distance = |k: usize| {
+                let o = &self.obstacles[group[k].1];
+                let local = o.pose.inverse_transform_point(x1[i]);
+                let hint = o.pose_prev.inverse_transform_point(x0[i]);
+                o.closest_local(local, hint).signed_distance
+            };
+            let (da, db) = (distance(a), distance(b));
+            let th = self.thickness[i];
+            if da >= th && db >= th {
+                continue;
+            }
+            // Along a's normal, the surfaces are da below and db above (opposed normals).
+            let na = group[a].2;
+            let gap = da + db;
+            if gap >= 2.0 * th {
+                continue;
+            }
+            x1[i] += na * (0.5 * gap - da);
+            let vs = 0.5 * (group[a].3 + group[b].3).dot(na);
+            v1[i] += na * (vs - v1[i].dot(na));
+        }
+    }
+
     /// Cloth vertices against every obstacle (all vertices, or those flagged in `only`).
     #[allow(clippy::too_many_arguments)]
     fn vertex_pass(
@@ -433,6 +484,7 @@ impl CollisionStage {
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
+        self.center_pinched(x0, x1, v1, n);
 
         let mut report = CollisionReport {
             culled,
@@ -471,6 +523,7 @@ impl CollisionStage {
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
+            self.center_pinched(x0, x1, v1, n);
         }
         self.feature_moved = moved;
         if let Some(sc) = self.self_collider.as_mut() {

@@ -117,6 +117,11 @@ impl FkReport {
     }
 }
 
+/// Largest length (m) a robot description may use for an offset or a size. Finite is not enough:
+/// forward kinematics adds the offsets of a chain, and two origins of 1e308 m overflow to
+/// infinity. A million metres is far beyond any robot and far below overflow for any chain.
+pub const MAX_LENGTH: f64 = 1e6;
+
 /// Why a joint/link graph is not a single tree.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum TreeError {
@@ -148,7 +153,7 @@ pub enum TreeError {
     MimicCycle(String),
     #[error("joint `{joint}`: axis {axis} has zero length or is not finite")]
     BadAxis { joint: String, axis: Vec3 },
-    #[error("joint `{joint}`: origin is not finite")]
+    #[error("joint `{joint}`: origin is not finite or farther than {MAX_LENGTH:e} m")]
     BadOrigin { joint: String },
 }
 
@@ -222,7 +227,7 @@ impl Kinematics {
                 });
             }
             parent_joint[child_link] = Some(ji);
-            if !s.origin.is_finite() {
+            if !s.origin.is_finite() || s.origin.translation.length() > MAX_LENGTH {
                 return Err(TreeError::BadOrigin {
                     joint: s.name.clone(),
                 });

@@ -1,7 +1,7 @@
 //! URDF loading: parse with `urdf-rs`, build the kinematic tree, and collect per-link collision
 //! geometry (optionally falling back to visual geometry) with meshes resolved and loaded.
 
-use super::kinematics::{JointKind, JointSpec, Kinematics, TreeError};
+use super::kinematics::{JointKind, JointSpec, Kinematics, TreeError, MAX_LENGTH};
 use super::resolve::{resolve_uri, ResolveError, SearchPaths};
 use super::{Geometry, Robot};
 use crate::mesh::{load_mesh, MeshError, TriMeshData};
@@ -188,10 +188,10 @@ fn build(
         let mut shapes = Vec::with_capacity(elems.len());
         for (o, g) in elems {
             let pose = to_pose(o);
-            if !pose.is_finite() {
+            if !pose.is_finite() || pose.translation.length() > MAX_LENGTH {
                 return Err(RobotError::BadGeometry {
                     link: link.name.clone(),
-                    message: "origin is not finite".into(),
+                    message: format!("origin is not finite or farther than {MAX_LENGTH:e} m"),
                 });
             }
             let geometry = convert_geometry(&link.name, g, dir, &search, &mut cache)?;
@@ -207,12 +207,12 @@ fn build(
 }
 
 fn positive(link: &str, what: &str, v: f64) -> Result<f64, RobotError> {
-    if v.is_finite() && v > 0.0 {
+    if v.is_finite() && v > 0.0 && v <= MAX_LENGTH {
         Ok(v)
     } else {
         Err(RobotError::BadGeometry {
             link: link.to_string(),
-            message: format!("{what} must be positive and finite, got {v}"),
+            message: format!("{what} must be positive and at most {MAX_LENGTH:e} m, got {v}"),
         })
     }
 }

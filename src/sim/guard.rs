@@ -96,9 +96,12 @@ impl fmt::Display for DivergenceError {
             }
             write!(
                 f,
-                "): lower dt, raise solver.substeps, soften {} or use the implicit integrator",
+                "): lower dt, raise solver.substeps or soften {}",
                 b.parameter
             )?;
+            if self.integrator != "implicit" {
+                write!(f, ", or use the implicit integrator")?;
+            }
         }
         Ok(())
     }

@@ -169,6 +169,8 @@ pub struct Simulation {
     collision: Option<CollisionStage>,
     /// Start and end pose over the current frame of obstacles driven from outside (robot links).
     obstacle_targets: Vec<Option<(Pose, Pose)>>,
+    /// Upper bound of the cloth's highest angular frequency (rad/s), computed on first use.
+    omega_bound: Option<f64>,
 }
 
 impl Simulation {
@@ -202,6 +204,7 @@ impl Simulation {
             last: StepMetrics::default(),
             collision: None,
             obstacle_targets: Vec::new(),
+            omega_bound: None,
         }
     }
 
@@ -436,6 +439,15 @@ impl Simulation {
         depth: u32,
         m: &mut StepMetrics,
     ) -> Result<(), Box<DivergenceError>> {
+        if self.over_stability_limit(h, depth) {
+            // Known to be unstable before trying: an explicit step over its limit is only caught
+            // by the energy check once the unstable mode carries a visible share of the energy,
+            // and that energy would stay in the cloth. Halve it up front instead.
+            m.subdivisions += 1;
+            let sm = 0.5 * (s0 + s1);
+            self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
+            return self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m);
+        }
         let n = self.cloth.len();
         // 1. Kinematic vertices: start on target, move at the constant velocity that reaches the end target.
         if self.constraints.filter.len() != n {
@@ -546,6 +558,30 @@ impl Simulation {
         }
         m.substeps += 1;
         Ok(())
+    }
+
+    /// Whether a substep of `h` exceeds the integrator's stability limit `h omega <= limit` for the
+    /// bound `omega^2 <= sum over elastic effects of their Gershgorin bounds`, and the guard's
+    /// policy allows halving it. Integrators without a limit (implicit) or with none at all
+    /// (forward Euler, limit 0) are left to the reactive guard.
+    fn over_stability_limit(&mut self, h: f64, depth: u32) -> bool {
+        let g = self.settings.guard;
+        if g.policy != DivergencePolicy::Subdivide || depth >= g.max_subdivisions {
+            return false;
+        }
+        let Some(limit) = self.integrator.stability_limit().filter(|l| *l > 0.0) else {
+            return false;
+        };
+        let omega = *self.omega_bound.get_or_insert_with(|| {
+            let sum: f64 = self
+                .effects
+                .stiffness(&self.cloth.mass)
+                .iter()
+                .map(|b| b.omega_sq)
+                .sum();
+            sum.sqrt()
+        });
+        h * omega > limit
     }
 
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass

@@ -1,0 +1,105 @@
+//! The hard-case catalogue (`src/hard/`) at CI resolution: every case must meet its criteria.
+//! Full resolution: `cargo test --release --test hard_cases -- --ignored`.
+
+use drape::hard::{catalogue, run_case, Outcome, Resolution};
+
+fn run(name: &str, res: Resolution) -> Outcome {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no hard case {name}"));
+    let case = build(res).unwrap_or_else(|e| panic!("{e}"));
+    let o = run_case(case);
+    eprintln!("{name}: {:?}", o.worst);
+    o
+}
+
+fn check(name: &str, res: Resolution) {
+    let o = run(name, res);
+    assert!(o.passed(), "{name}: {}", o.failures.join("; "));
+}
+
+macro_rules! cases {
+    ($($name:ident),* $(,)?) => {
+        const TESTED: &[&str] = &[$(stringify!($name)),*];
+        mod ci {
+            $( #[test] fn $name() { super::check(stringify!($name), super::Resolution::Ci); } )*
+        }
+        mod full {
+            $( #[test] #[ignore = "full resolution: minutes"] fn $name() {
+                super::check(stringify!($name), super::Resolution::Full);
+            } )*
+        }
+    };
+}
+
+cases!(
+    stiff_implicit,
+    stiff_explicit_near_limit,
+    stiff_explicit_over_limit,
+    light_cloth,
+    heavy_cloth,
+    tiny_cloth,
+    huge_cloth,
+    impact_20_m_s,
+    robot_swing_at_velocity_limit,
+    pinch_below_thickness,
+    crumple_heap,
+    degenerate_mesh,
+    pinned_inside_obstacle,
+    wind_50_m_s,
+    long_run_10_min,
+);
+
+#[test]
+fn every_catalogued_case_has_a_test() {
+    let names: Vec<&str> = catalogue().iter().map(|(n, _)| *n).collect();
+    assert_eq!(
+        names, TESTED,
+        "catalogue and cases!() must list the same cases"
+    );
+}
+
+/// The summary command's Markdown lists every case with its verdict and worst values.
+#[test]
+fn summary_lists_every_case() {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == "tiny_cloth")
+        .expect("tiny_cloth is catalogued");
+    let o = run_case(build(Resolution::Ci).expect("builds"));
+    let md = drape::hard::markdown(std::slice::from_ref(&o), Resolution::Ci);
+    assert!(md.contains("| tiny_cloth | yes |"), "{md}");
+    assert!(md.contains("### tiny_cloth"), "{md}");
+    assert!(md.contains("1 of 1 cases pass"), "{md}");
+}
+
+/// The robot case really swings at the URDF velocity limits, not below or above them.
+#[test]
+fn robot_swing_moves_at_the_joint_velocity_limits() {
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == "robot_swing_at_velocity_limit")
+        .expect("catalogued");
+    let case = build(Resolution::Ci).expect("builds");
+    let d = case.driver.expect("the case has a robot");
+    let kin = d.robot().kinematics();
+    for name in ["right_shoulder_pitch", "right_wrist"] {
+        let ji = kin.joint_index(name).expect("joint exists");
+        let limit = kin.joints()[ji].velocity_limit.expect("URDF gives a limit");
+        let h = 1e-3;
+        let fastest = (0..3000)
+            .map(|k| {
+                let t = k as f64 * h;
+                let (a, _) = kin.effective_position(&d.positions_at(t), ji);
+                let (b, _) = kin.effective_position(&d.positions_at(t + h), ji);
+                ((b - a) / h).abs()
+            })
+            .fold(0.0, f64::max);
+        // Piecewise-linear motion: the finite difference is exact except across a knot.
+        assert!(
+            (fastest - limit).abs() < 1e-6 * limit,
+            "{name}: {fastest} rad/s vs limit {limit}"
+        );
+    }
+}
