@@ -145,6 +145,9 @@ pub struct CollisionStage {
     feature_collider: FeatureCollider,
     /// Per-vertex "moved by a feature contact" flags (reused).
     feature_moved: Vec<bool>,
+    /// Per vertex, the normal and normal velocity change (m/s) the implicit solver's contact
+    /// filter applied this step (see `set_held`); used once by the next `resolve`.
+    held: Vec<(Vec3, f64)>,
 }
 
 impl CollisionStage {
@@ -193,6 +196,7 @@ impl CollisionStage {
             features,
             feature_collider,
             feature_moved: Vec::new(),
+            held: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -215,6 +219,22 @@ impl CollisionStage {
     /// Contacts found by the last `resolve` (for the implicit solver's filter and for metrics).
     pub fn contacts(&self) -> &[Contact] {
         &self.contacts
+    }
+
+    /// Records that the solver held `vertex` against a surface of normal `normal` this step,
+    /// removing the normal velocity `dvn` (m/s, >= 0) that the other forces would have given it.
+    /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
+    /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
+    /// velocity change it sees; without it a held vertex slides frictionless.
+    pub fn set_held(&mut self, vertex: usize, normal: Vec3, dvn: f64) {
+        if vertex >= self.n_vertices || !(dvn.is_finite() && dvn > 0.0) || !normal.is_finite() {
+            return;
+        }
+        if self.held.len() != self.n_vertices {
+            self.held.clear();
+            self.held.resize(self.n_vertices, (Vec3::ZERO, 0.0));
+        }
+        self.held[vertex] = (normal, dvn);
     }
 
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
@@ -263,6 +283,7 @@ impl CollisionStage {
             self.scratch.resize(n, None);
             let thickness = &self.thickness;
             let friction = &self.friction;
+            let held = &self.held;
             self.scratch
                 .par_iter_mut()
                 .zip(x1[..n].par_iter_mut())
@@ -287,6 +308,7 @@ impl CollisionStage {
                         h,
                         mode,
                         response,
+                        held: held.get(i).copied().unwrap_or((Vec3::ZERO, 0.0)),
                     };
                     *out = obstacle_vertex(o, oi, &input, x, v);
                 });
@@ -350,6 +372,7 @@ impl CollisionStage {
             }
         }
         self.feature_moved = moved;
+        self.held.clear();
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,
