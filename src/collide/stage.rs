@@ -158,6 +158,9 @@ pub struct CollisionStage {
     culling: bool,
     /// Per obstacle: near enough to the cloth to be tested this step.
     near: Vec<bool>,
+    /// Per vertex, the normal and normal velocity change (m/s) the implicit solver's contact
+    /// filter applied this step (see `set_held`); used once by the next `resolve`.
+    held: Vec<(Vec3, f64)>,
 }
 
 impl CollisionStage {
@@ -206,6 +209,7 @@ impl CollisionStage {
             features,
             feature_collider,
             feature_moved: Vec::new(),
+            held: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -282,6 +286,22 @@ impl CollisionStage {
     /// Contacts found by the last `resolve` (for the implicit solver's filter and for metrics).
     pub fn contacts(&self) -> &[Contact] {
         &self.contacts
+    }
+
+    /// Records that the solver held `vertex` against a surface of normal `normal` this step,
+    /// removing the normal velocity `dvn` (m/s, >= 0) that the other forces would have given it.
+    /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
+    /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
+    /// velocity change it sees; without it a held vertex slides frictionless.
+    pub fn set_held(&mut self, vertex: usize, normal: Vec3, dvn: f64) {
+        if vertex >= self.n_vertices || !(dvn.is_finite() && dvn > 0.0) || !normal.is_finite() {
+            return;
+        }
+        if self.held.len() != self.n_vertices {
+            self.held.clear();
+            self.held.resize(self.n_vertices, (Vec3::ZERO, 0.0));
+        }
+        self.held[vertex] = (normal, dvn);
     }
 
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
@@ -429,6 +449,7 @@ impl CollisionStage {
             // independent within one obstacle), in vertex order.
             let x1r: &[Vec3] = x1;
             let v1r: &[Vec3] = v1;
+            let held = &self.held;
             self.scratch.clear();
             self.scratch.par_extend(
                 self.candidates
@@ -444,6 +465,7 @@ impl CollisionStage {
                             h,
                             mode,
                             response,
+                            held: held.get(i).copied().unwrap_or((Vec3::ZERO, 0.0)),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -526,6 +548,7 @@ impl CollisionStage {
             self.center_pinched(x0, x1, v1, n);
         }
         self.feature_moved = moved;
+        self.held.clear();
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,

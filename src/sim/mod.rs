@@ -463,7 +463,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        self.contact_constraints(t);
+        self.contact_constraints(t, h);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -587,8 +587,8 @@ impl Simulation {
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
     /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
     /// vertex is pulled away from the surface by the other forces is released instead of held.
-    fn contact_constraints(&mut self, t: f64) {
-        let Some(stage) = &self.collision else {
+    fn contact_constraints(&mut self, t: f64, h: f64) {
+        let Some(stage) = self.collision.as_mut() else {
             return;
         };
         if !stage.settings().response.uses_filter() || stage.contacts().is_empty() {
@@ -602,15 +602,22 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
+        let mut held = Vec::new();
         for c in stage.contacts() {
             let i = c.vertex as usize;
             if i >= n || self.constraints.filter[i] == Filter::Fixed {
                 continue;
             }
-            if self.scratch_f[i].dot(c.normal) <= 0.0 {
+            let load = self.scratch_f[i].dot(c.normal);
+            if load <= 0.0 {
                 self.constraints.filter[i] = Filter::Direction(c.normal);
                 self.constraints.target_velocity[i] = c.surface_velocity;
+                // The normal velocity the filter takes away this step, for friction.
+                held.push((i, c.normal, -load * h / self.cloth.mass[i]));
             }
+        }
+        for &(i, normal, dvn) in &held {
+            stage.set_held(i, normal, dvn);
         }
     }
 
