@@ -10,7 +10,7 @@ use super::{pattern, GarmentError};
 use crate::cloth::topology::Spring;
 use crate::cloth::{Cloth, Material, Panel};
 use crate::effects::{
-    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, VelocityDiffusion, Wind,
+    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, VelocityDiffusion,
 };
 use crate::robot::RobotDriver;
 use crate::scene::{EffectKind, Scene};
@@ -114,14 +114,7 @@ pub fn effects(scene: &Scene, cloth: &Cloth, topo: &Topology, sewing: bool) -> E
             ))),
             EffectKind::Wind if !sewing => {
                 if let Some(w) = &scene.wind {
-                    set.push(Box::new(Wind::new(
-                        w.velocity,
-                        w.keys.clone(),
-                        w.gusts.clone(),
-                        w.air_density,
-                        w.drag_coefficient,
-                        cloth.triangles.clone(),
-                    )));
+                    set.push(Box::new(w.effect(cloth.triangles.clone())));
                 }
             }
             EffectKind::Damping => {

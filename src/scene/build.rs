@@ -5,7 +5,7 @@ use crate::cloth::topology::{bending_stencils, springs, twist_stencils, SpringKi
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
 use crate::effects::{
-    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion, Wind,
+    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion,
 };
 use crate::integrate::ImplicitSettings;
 use crate::robot::driver::link_obstacles;
@@ -430,14 +430,7 @@ fn build_effects(scene: &Scene, cloth: &Cloth) -> EffectSet {
             }
             EffectKind::Wind => {
                 if let Some(w) = &scene.wind {
-                    set.push(Box::new(Wind::new(
-                        w.velocity,
-                        w.keys.clone(),
-                        w.gusts.clone(),
-                        w.air_density,
-                        w.drag_coefficient,
-                        cloth.triangles.clone(),
-                    )));
+                    set.push(Box::new(w.effect(cloth.triangles.clone())));
                 }
             }
             EffectKind::Damping => build_damping(&mut set, cloth),

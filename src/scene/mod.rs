@@ -105,6 +105,20 @@ pub struct WindSpec {
     pub drag_coefficient: f64,
 }
 
+impl WindSpec {
+    /// The wind effect on a cloth of these triangles.
+    pub fn effect(&self, triangles: Vec<[u32; 3]>) -> crate::effects::Wind {
+        crate::effects::Wind::new(
+            self.velocity,
+            self.keys.clone(),
+            self.gusts.clone(),
+            self.air_density,
+            self.drag_coefficient,
+            triangles,
+        )
+    }
+}
+
 fn air_density() -> f64 {
     1.2
 }
