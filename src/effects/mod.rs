@@ -47,6 +47,12 @@ pub trait Effect: Send + Sync {
     /// Declares the vertex pairs the Jacobians couple (default: none, e.g. gravity).
     fn declare(&self, _pattern: &mut PatternBuilder) {}
 
+    /// Sets the constant part of the air velocity (m/s, scripted keys and gusts still add);
+    /// false for effects that are not wind.
+    fn set_wind_velocity(&mut self, _velocity: Vec3) -> bool {
+        false
+    }
+
     /// Adds this effect's forces at `s` to `f`.
     fn add_forces(&self, s: &State, f: &mut [Vec3]);
 
@@ -180,6 +186,16 @@ impl EffectSet {
         for e in &self.effects {
             e.declare(p);
         }
+    }
+
+    /// Sets the constant wind velocity of every wind effect (a live change, e.g. from the node's
+    /// `wind` parameter); false when the set has no wind (a scene that does not name wind).
+    pub fn set_wind_velocity(&mut self, velocity: Vec3) -> bool {
+        let mut any = false;
+        for e in &mut self.effects {
+            any |= e.set_wind_velocity(velocity);
+        }
+        any
     }
 
     /// Sum of all forces at `s` (overwrites `f`). Position-only forces come from the cache when

@@ -95,6 +95,11 @@ impl Effect for Wind {
         "wind"
     }
 
+    fn set_wind_velocity(&mut self, velocity: Vec3) -> bool {
+        self.velocity = velocity;
+        true
+    }
+
     fn declare(&self, p: &mut PatternBuilder) {
         for t in &self.triangles {
             p.couple_all(t);

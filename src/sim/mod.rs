@@ -293,6 +293,12 @@ impl Simulation {
         self.time
     }
 
+    /// Sets the scene's constant wind velocity from now on (m/s); false when the scene has no
+    /// wind effect (it names none, so none was built).
+    pub fn set_wind_velocity(&mut self, velocity: Vec3) -> bool {
+        velocity.is_finite() && self.effects.set_wind_velocity(velocity)
+    }
+
     pub fn effects(&self) -> &EffectSet {
         &self.effects
     }

@@ -211,8 +211,9 @@ fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError> {
 }
 
 /// Parameters served through ros2-client's parameter services. Live: `publish_rate`,
-/// `paused`; the others are read-only and reject changes.
-fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
+/// `paused`, and `wind` (constant air velocity `[x, y, z]` m/s) when the scene names wind; the
+/// others are read-only and reject changes.
+fn node_options(p: &NodeParams, wind: Option<[f64; 3]>, cmd: Sender<Command>) -> NodeOptions {
     let read_only: Vec<(&'static str, ParameterValue)> = vec![
         ("use_sim_time", ParameterValue::Boolean(p.use_sim_time)),
         (
@@ -226,6 +227,9 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
         .start_parameter_services(true)
         .declare_parameter("publish_rate", ParameterValue::Double(p.publish_rate))
         .declare_parameter("paused", ParameterValue::Boolean(p.paused));
+    if let Some(w) = wind {
+        o = o.declare_parameter("wind", ParameterValue::DoubleArray(w.to_vec()));
+    }
     for (k, v) in &read_only {
         o = o.declare_parameter(k, v.clone());
     }
@@ -236,6 +240,11 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
             ("publish_rate", _) => Err("publish_rate must be a number".into()),
             ("paused", ParameterValue::Boolean(_)) => Ok(()),
             ("paused", _) => Err("paused must be a boolean".into()),
+            ("wind", ParameterValue::DoubleArray(v)) if wind.is_some() => {
+                wind_velocity(v).map(|_| ())
+            }
+            ("wind", _) if wind.is_some() => Err("wind must be [x, y, z] in m/s".into()),
+            ("wind", _) => Err("the scene names no wind effect".into()),
             _ => match read_only.iter().find(|(k, _)| *k == name) {
                 Some((_, v)) if v == value => Ok(()),
                 Some(_) => Err(format!(
@@ -250,6 +259,7 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
             ("publish_rate", ParameterValue::Double(r)) => Command::PublishRate(*r),
             ("publish_rate", ParameterValue::Integer(r)) => Command::PublishRate(*r as f64),
             ("paused", ParameterValue::Boolean(b)) => Command::Pause(*b),
+            ("wind", ParameterValue::DoubleArray(v)) => Command::Wind(wind_velocity(v)?),
             _ => return Ok(()),
         };
         cmd.send(c)
@@ -257,6 +267,16 @@ fn node_options(p: &NodeParams, cmd: Sender<Command>) -> NodeOptions {
     };
     o.parameter_validator(Box::new(validator))
         .parameter_set_action(Box::new(action))
+}
+
+/// A wind parameter value: three finite numbers (m/s).
+fn wind_velocity(v: &[f64]) -> Result<[f64; 3], String> {
+    match v {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(format!(
+            "wind must be three finite numbers [x, y, z] in m/s, got {v:?}"
+        )),
+    }
 }
 
 /// Logs to the process log and `/rosout`, both.
@@ -342,6 +362,11 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         paused: params.paused,
         color: params.color,
     };
+    let wind = scene
+        .wind
+        .as_ref()
+        .filter(|_| scene.has(crate::scene::EffectKind::Wind))
+        .map(|w| w.velocity.to_array());
     let core = SimLoop::new(scene, cfg, wall.now())?;
     log::info!(
         "drape node: scene {} ({} vertices), frame `{}`, {} Hz, {} layout, domain {}{}{}",
@@ -373,7 +398,7 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         ))
     })?;
     let mut node = ctx
-        .new_node(node_name, node_options(params, cmd_tx.clone()))
+        .new_node(node_name, node_options(params, wind, cmd_tx.clone()))
         .map_err(|e| NodeError::Dds(format!("node: {e:?}")))?;
     let spinner = node
         .spinner()

@@ -36,6 +36,8 @@ pub enum Command {
     },
     Pause(bool),
     PublishRate(f64),
+    /// New constant wind velocity (m/s) for a scene that names wind; kept across resets.
+    Wind([f64; 3]),
     Stop,
 }
 
@@ -296,6 +298,21 @@ impl SimLoop {
                 if super::params::positive_rate(r).is_ok() {
                     self.cfg.publish_rate = r;
                     self.publish.set_rate(r, now);
+                }
+            }
+            Command::Wind(v) => {
+                let v = crate::Vec3::from_array(v);
+                match self.scene.wind.as_mut() {
+                    Some(w) if self.sim.set_wind_velocity(v) => {
+                        // The scene is what a reset rebuilds from: the new wind survives it.
+                        w.velocity = v;
+                        log(out, Level::Info, format!("wind set to {v:?} m/s"));
+                    }
+                    _ => log(
+                        out,
+                        Level::Warn,
+                        format!("wind {v:?} ignored: the scene names no wind effect"),
+                    ),
                 }
             }
             Command::Stop => return false,
