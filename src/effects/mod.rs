@@ -392,6 +392,14 @@ mod tests {
         f
     }
 
+    /// `EffectSet::forces` (cached or not) at `x, v` equals each effect's forces summed afresh.
+    fn forces_match_reference(set: &EffectSet, x: &[Vec3], v: &[Vec3]) {
+        let s = State { t: 0.0, x, v };
+        let mut f = vec![Vec3::ZERO; x.len()];
+        set.forces(&s, &mut f);
+        close(&f, &reference(set, &s));
+    }
+
     fn close(a: &[Vec3], b: &[Vec3]) {
         for (p, q) in a.iter().zip(b) {
             // Same terms, possibly summed in another order: a few ulps of the largest term.
@@ -406,51 +414,14 @@ mod tests {
     fn cached_forces_equal_fresh_forces_and_skip_the_position_only_pass() {
         let (set, mut x, v, _) = chain();
         set.energy_split(&x);
-        let mut f = vec![Vec3::ZERO; x.len()];
-        set.forces(
-            &State {
-                t: 0.0,
-                x: &x,
-                v: &v,
-            },
-            &mut f,
-        );
-        close(
-            &f,
-            &reference(
-                &set,
-                &State {
-                    t: 0.0,
-                    x: &x,
-                    v: &v,
-                },
-            ),
-        );
+        forces_match_reference(&set, &x, &v);
         // The springs were evaluated once (in the energy pass), the drag at every call.
         let counts = set.evaluation_counts();
         assert_eq!(counts, vec![("gravity", 1), ("stretch", 1), ("damping", 1)]);
 
         // Moved positions miss the cache and are evaluated afresh.
         x[2].y += 1e-3;
-        set.forces(
-            &State {
-                t: 0.0,
-                x: &x,
-                v: &v,
-            },
-            &mut f,
-        );
-        close(
-            &f,
-            &reference(
-                &set,
-                &State {
-                    t: 0.0,
-                    x: &x,
-                    v: &v,
-                },
-            ),
-        );
+        forces_match_reference(&set, &x, &v);
         assert_eq!(set.evaluation_counts()[1], ("stretch", 2));
     }
 
@@ -471,25 +442,6 @@ mod tests {
         assert!((el - springs_energy).abs() <= 1e-15 * springs_energy.abs().max(1e-30));
         assert!((gr - gravity_energy).abs() <= 1e-14 * gravity_energy.abs());
         set.push_gravity(Gravity::new(Vec3::new(1.0, 0.0, 0.0), &mass));
-        let mut f = vec![Vec3::ZERO; x.len()];
-        set.forces(
-            &State {
-                t: 0.0,
-                x: &x,
-                v: &v,
-            },
-            &mut f,
-        );
-        close(
-            &f,
-            &reference(
-                &set,
-                &State {
-                    t: 0.0,
-                    x: &x,
-                    v: &v,
-                },
-            ),
-        );
+        forces_match_reference(&set, &x, &v);
     }
 }
