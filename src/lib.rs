@@ -3,7 +3,7 @@
 //! The core (`cloth`, `effects`, `integrate`, `collide`, `scene`, `sim`, `mesh`, `robot`)
 //! is pure Rust with no ROS types; `ros` (feature `ros`, on by default) turns cloth
 //! into ROS 2 messages, writes rosbag2 MCAP files and runs the live node.
-//! See `DESIGN.md` at the repository's shared folder for the layering.
+//! See `docs/DESIGN.md` for the layering and the order of one step.
 
 // Numeric loops index several parallel arrays at once; iterator zips would hide the math.
 #![allow(clippy::needless_range_loop)]
