@@ -91,6 +91,8 @@ enum Solver {
 
 /// How the bench talks to the simulation: through DDS (the real node), or straight to the
 /// simulation thread over channels (the node's pipeline without DDS).
+// One value per row: the size of the DDS variant does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Link {
     Dds {
         stop: Arc<AtomicBool>,
