@@ -37,8 +37,8 @@ fn implicit_step_accepts_an_arm_jump_and_the_energy_then_decays() {
     // 64x64 one takes the jump whole), so one halving is allowed.
     assert!(
         m.subdivisions <= 1,
-        "the guard redid the jump step as {} halves",
-        m.subdivisions + 1
+        "the guard subdivided the jump step {} times",
+        m.subdivisions
     );
     let after_jump = m.kinetic_energy + m.potential_energy;
     // Holding the new pose: the energy put in by the jump is dissipated, not amplified.
