@@ -348,7 +348,10 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         Some(d) => d,
         None => Distro::from_env().map_err(|e| NodeError::Params(e.to_string()))?,
     };
-    let scene = Scene::load(&params.scene)?;
+    let mut scene = Scene::load(&params.scene)?;
+    if params.real_time_preview {
+        sim_loop::real_time_preview(&mut scene);
+    }
     let net = Network::from_env().map_err(NodeError::Params)?;
     let wall = WallClock::new();
     let cfg = LoopConfig {

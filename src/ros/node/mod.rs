@@ -18,7 +18,8 @@ pub use params::{
     parse_ros_args, DescriptionSource, NodeParams, ParamsError, RosArgs, ServiceWire,
 };
 pub use sim_loop::{
-    ClockMode, Command, DroppedInputs, Level, LoopConfig, LoopStats, Output, SimLoop, WallClock,
+    real_time_preview, ClockMode, Command, DroppedInputs, Level, LoopConfig, LoopStats, Output,
+    SimLoop, WallClock,
 };
 
 /// Why the node could not run.

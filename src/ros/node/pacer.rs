@@ -106,6 +106,20 @@ impl Schedule {
         true
     }
 
+    /// Like [`Schedule::due`], but also true (once) when the next instant is at most `lead`
+    /// ahead of `now`: that instant is taken early. The instants after it stay on the grid,
+    /// so the mean rate is unchanged and no instant fires twice.
+    pub fn due_within(&mut self, now: f64, lead: f64) -> bool {
+        if now + lead.max(0.0) + 1e-9 < self.next {
+            return false;
+        }
+        self.next += self.period;
+        if self.next <= now {
+            self.next = now + self.period;
+        }
+        true
+    }
+
     /// Changes the rate; the next instant is at most one new period away.
     pub fn set_rate(&mut self, rate: f64, now: f64) {
         self.period = 1.0 / rate;
@@ -193,5 +207,26 @@ mod tests {
         assert!(s.due(0.8));
         assert!(!s.due(1.7));
         assert!(s.due(1.8));
+    }
+
+    #[test]
+    fn schedule_takes_an_instant_early_without_changing_the_rate() {
+        let mut s = Schedule::new(10.0, 0.0);
+        assert!(s.due(0.0));
+        // 0.1 is more than 0.03 away at 0.06, within it at 0.08: taken early, once.
+        assert!(!s.due_within(0.06, 0.03));
+        assert!(s.due_within(0.08, 0.03));
+        assert!(!s.due(0.1));
+        assert!(!s.due_within(0.15, 0.03));
+        // The grid is kept: 0.2, 0.3, ...
+        assert!(s.due(0.2));
+        assert!(!s.due(0.29));
+        assert!(s.due(0.3));
+        // No lead: the same as `due`.
+        assert!(!s.due_within(0.35, 0.0));
+        assert!(s.due_within(0.4, 0.0));
+        // Far behind: restarts from now, not from now + lead.
+        assert!(s.due_within(2.0, 0.05));
+        assert!((s.next() - 2.1).abs() < 1e-12);
     }
 }

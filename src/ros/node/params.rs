@@ -81,6 +81,9 @@ pub struct NodeParams {
     pub paused: bool,
     /// Steps the simulation may be behind before the backlog is dropped.
     pub max_backlog_steps: u32,
+    /// Replace the scene's implicit solver settings by the real-time preview ones
+    /// ([`super::sim_loop::real_time_preview`]).
+    pub real_time_preview: bool,
     pub service_wire: ServiceWire,
     pub topics: Topics,
     pub color: [f32; 4],
@@ -101,6 +104,7 @@ impl Default for NodeParams {
             use_sim_time: false,
             paused: false,
             max_backlog_steps: 6,
+            real_time_preview: false,
             service_wire: ServiceWire::Enhanced,
             topics: Topics::default(),
             color: [0.85, 0.35, 0.2, 1.0],
@@ -296,6 +300,7 @@ impl NodeParams {
             }
             "use_sim_time" => self.use_sim_time = boolean(v)?,
             "paused" => self.paused = boolean(v)?,
+            "real_time_preview" => self.real_time_preview = boolean(v)?,
             "max_backlog_steps" => {
                 let n = number(v)?;
                 if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
@@ -499,5 +504,19 @@ drape:
         assert!(p
             .apply_overrides(&[("publish_rate".into(), "fast".into())])
             .is_err());
+    }
+
+    #[test]
+    fn real_time_preview_is_a_boolean_option() {
+        let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
+        assert!(!p.real_time_preview);
+        p.apply_overrides(&[("real_time_preview".into(), "true".into())])
+            .unwrap();
+        assert!(p.real_time_preview);
+        let e = p
+            .apply_overrides(&[("real_time_preview".into(), "fast".into())])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("real_time_preview"), "{e}");
     }
 }

@@ -153,6 +153,8 @@ pub struct SimLoop {
     driver: Option<RobotDriver>,
     frame_id: String,
     commanded: Option<JointPositions>,
+    /// A changed joint command arrived that no step has reached yet.
+    fresh_command: bool,
     last_stamp: Option<i64>,
     pacer: Pacer,
     publish: Schedule,
@@ -197,6 +199,7 @@ impl SimLoop {
             sim,
             driver: None,
             commanded: None,
+            fresh_command: false,
             last_stamp: None,
             stats: LoopStats::default(),
             window: Window {
@@ -323,17 +326,24 @@ impl SimLoop {
     /// Runs one step if one is due at clock time `now` and emits the outputs due. Returns true
     /// while more steps are owed: call again with a fresh `now` (one step per call keeps
     /// publishing on schedule when the solver is slower than real time).
+    ///
+    /// A step that reached a changed joint command publishes at once when the next publish
+    /// instant is less than a step away (that instant is taken early, the rate is unchanged):
+    /// the new pose is out one step sooner than if it waited for the instant.
     pub fn tick(&mut self, now: f64, out: &mut Vec<Output>) -> bool {
         let mut owed = 0;
+        let mut reached = false;
         if self.paused {
             self.pacer.hold(now, self.sim.time());
         } else {
             owed = self.pacer.due_steps(now, self.sim.time());
             if owed > 0 {
+                reached = std::mem::take(&mut self.fresh_command);
                 self.step_once(now, out);
             }
         }
-        if self.publish.due(now) {
+        let lead = if reached { self.pacer.dt() } else { 0.0 };
+        if self.publish.due_within(now, lead) {
             out.push(self.frame());
             self.stats.frames += 1;
         }
@@ -475,10 +485,11 @@ impl SimLoop {
             drop_warning(out, &self.stats.dropped, &msg);
             return;
         }
-        let mut q = self
+        let base = self
             .commanded
             .clone()
             .unwrap_or_else(|| d.joint_positions().clone());
+        let mut q = base.clone();
         if let Err(e) = input.apply(d.robot().kinematics(), &mut q) {
             let slot = match e {
                 JointInputError::NotFinite { .. } | JointInputError::NonFinitePose(_) => {
@@ -507,6 +518,7 @@ impl SimLoop {
             JointSource::Stream(vec![(t, now_q), (t + dt, q.clone())]),
             t,
         );
+        self.fresh_command |= q != base;
         self.commanded = Some(q);
     }
 
@@ -603,6 +615,18 @@ fn drop_warning(out: &mut Vec<Output>, dropped: &DroppedInputs, why: &str) {
 
 fn log(out: &mut Vec<Output>, level: Level, text: String) {
     out.push(Output::Log { level, text });
+}
+
+/// The real-time preview solver settings: one substep, CG tolerance 1e-2, at most 50 CG
+/// iterations, for an implicit scene (other integrators keep their settings: fewer substeps
+/// would make them unstable). Trades accuracy (stiffer-looking, less converged cloth) for a
+/// step several times cheaper, so a large cloth can keep real time.
+pub fn real_time_preview(scene: &mut Scene) {
+    if scene.solver.integrator == crate::integrate::IntegratorKind::Implicit {
+        scene.solver.substeps = 1;
+        scene.solver.cg_tolerance = scene.solver.cg_tolerance.max(1e-2);
+        scene.solver.cg_max_iterations = scene.solver.cg_max_iterations.min(50);
+    }
 }
 
 /// ROS time from seconds (negative clamps to 0).
@@ -715,5 +739,97 @@ pub fn run(
                 return;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const T0: f64 = 1000.0;
+
+    fn towel(res: usize) -> Scene {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot_towel.yaml");
+        let mut scene = Scene::load(path.as_ref()).expect("robot_towel scene");
+        scene.cloths[0].grid.resolution = [res, res];
+        scene
+    }
+
+    fn shoulder(s: f64) -> Command {
+        Command::Joints {
+            stamp_ns: 0,
+            input: JointInput {
+                names: vec!["right_shoulder_pitch".into()],
+                positions: vec![s],
+                velocities: None,
+            },
+        }
+    }
+
+    fn frames(out: &[Output]) -> usize {
+        out.iter()
+            .filter(|o| matches!(o, Output::Frame { .. }))
+            .count()
+    }
+
+    /// Publish instants fall on even steps (T0, T0 + 2 dt, ...). A changed command before an
+    /// odd step publishes right after that step instead of a step later; an unchanged one does
+    /// not; and the number of frames per second stays the rate.
+    #[test]
+    fn a_step_reaching_a_new_command_publishes_a_step_early() {
+        let mut l = SimLoop::new(towel(6), LoopConfig::default(), T0).expect("loop");
+        let dt = l.simulation().settings.dt;
+        let mut out = Vec::new();
+        l.sync_clock(T0);
+        l.advance_to(T0, &mut out);
+        assert_eq!(frames(&out), 1);
+        // The scene's own pose, re-sent: nothing new to show, no early frame.
+        let q = l.driver().expect("robot").joint_positions().clone();
+        let j = l
+            .driver()
+            .unwrap()
+            .robot()
+            .joint_index("right_shoulder_pitch");
+        let s0 = q.positions[j.expect("shoulder")];
+        l.handle(shoulder(s0), T0 + 0.5 * dt, &mut out);
+        l.advance_to(T0 + dt, &mut out);
+        assert_eq!(frames(&out), 1, "unchanged command published early");
+        l.advance_to(T0 + 2.0 * dt, &mut out);
+        assert_eq!(frames(&out), 2);
+        // A new pose before the odd step at T0 + 3 dt: out right after it.
+        l.handle(shoulder(s0 + 0.05), T0 + 2.5 * dt, &mut out);
+        l.advance_to(T0 + 3.0 * dt, &mut out);
+        assert_eq!(
+            frames(&out),
+            3,
+            "new pose not published after the step reaching it"
+        );
+        // The instant at T0 + 4 dt was taken: none there; the grid resumes at T0 + 6 dt.
+        l.advance_to(T0 + 4.0 * dt, &mut out);
+        assert_eq!(frames(&out), 3);
+        let mut t = T0 + 4.0 * dt;
+        while t < T0 + 1.0 - 1e-9 {
+            t += 0.5 * dt;
+            l.advance_to(t, &mut out);
+        }
+        // Instants T0, T0 + 1/30, ..., T0 + 1: 31 frames, one of them early.
+        assert_eq!(frames(&out), 31);
+    }
+
+    #[test]
+    fn real_time_preview_changes_only_implicit_solver_settings() {
+        let mut scene = towel(6);
+        real_time_preview(&mut scene);
+        let s = &scene.solver;
+        assert_eq!(
+            (s.substeps, s.cg_tolerance, s.cg_max_iterations),
+            (1, 1e-2, 50)
+        );
+        let mut explicit = towel(6);
+        explicit.solver.integrator = crate::integrate::IntegratorKind::SymplecticEuler;
+        explicit.solver.substeps = 40;
+        let before = explicit.solver.clone();
+        real_time_preview(&mut explicit);
+        assert_eq!(explicit.solver, before);
     }
 }
