@@ -25,6 +25,9 @@ use thiserror::Error;
 const PAR_ROWS: usize = 2048;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
 const THETA: f64 = 0.08;
+/// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
+/// (Frobenius norms) are lumped onto the diagonal in the preconditioner (see [`Csr::filtered`]).
+const DROP: f64 = 1e-3;
 /// Stop coarsening at this many block rows; solve there with dense Cholesky.
 const COARSEST_ROWS: usize = 64;
 /// Larger coarsest levels (coarsening stalled) get symmetric Gauss-Seidel sweeps instead.
@@ -56,31 +59,58 @@ pub struct Csr {
     row_start: Vec<usize>,
     cols: Vec<u32>,
     vals: Vec<Mat3>,
+    /// Scratch of [`Csr::filtered`]: `|A_ii|_F^1/2` per row.
+    dnorm: Vec<f64>,
 }
 
 impl Csr {
     /// `S A S + c (I - S)` per vertex, `c` = trace(A_ii)/3, reusing this matrix's storage.
+    ///
+    /// Negligible couplings (`|A_ij|_F <= DROP |A_ii|_F^1/2 |A_jj|_F^1/2`) that are symmetric
+    /// positive semidefinite blocks `B`, e.g. bending's distance-2 blocks `h^2 c I` next to
+    /// stretch springs, are lumped onto the diagonal: the change `[B, -B; -B, B]` is positive
+    /// semidefinite (the result stays SPD) and leaves rigid translations, the near-null space
+    /// the coarse levels are built on, untouched; the smoother and every coarse level get
+    /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
     pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
         let n = a.rows();
         self.row_start.clear();
         self.cols.clear();
         self.vals.clear();
         self.row_start.push(0);
+        self.dnorm.clear();
+        self.dnorm
+            .extend((0..n).map(|i| frob2(&a.diagonal(i)).sqrt().sqrt()));
+        let drop2 = DROP * DROP;
         for (i, fi) in filter.iter().enumerate().take(n) {
             let (cols, vals) = a.row(i);
             let si = fi.matrix();
+            let mut diag = usize::MAX;
+            let mut lumped = Mat3::ZERO;
             for (&j, &blk) in cols.iter().zip(vals) {
                 let fj = &filter[j as usize];
                 let mut m = match (fi, fj) {
                     (Filter::Free, Filter::Free) => blk,
                     _ => si * blk * fj.matrix(),
                 };
-                if j as usize == i && !matches!(fi, Filter::Free) {
-                    let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
-                    m += (Mat3::IDENTITY - si) * c;
+                if j as usize == i {
+                    if !matches!(fi, Filter::Free) {
+                        let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
+                        m += (Mat3::IDENTITY - si) * c;
+                    }
+                    diag = self.cols.len();
+                } else {
+                    let scale = self.dnorm[i] * self.dnorm[j as usize];
+                    if frob2(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
+                        lumped += m;
+                        continue;
+                    }
                 }
                 self.cols.push(j);
                 self.vals.push(m);
+            }
+            if diag != usize::MAX {
+                self.vals[diag] += lumped;
             }
             self.row_start.push(self.cols.len());
         }
@@ -190,6 +220,7 @@ impl Csr {
             row_start: count,
             cols,
             vals,
+            dnorm: Vec::new(),
         }
     }
 
@@ -234,6 +265,7 @@ impl Csr {
             row_start: Vec::with_capacity(rows + 1),
             cols: Vec::new(),
             vals: Vec::new(),
+            dnorm: Vec::new(),
         };
         out.row_start.push(0);
         for (lens, cols, vals) in parts {
@@ -262,6 +294,23 @@ fn row_dot_at(cols: &[u32], vals: &[Mat3], x: &[Vec3], offset: usize) -> Vec3 {
         acc += *m * x[j as usize - offset];
     }
     acc
+}
+
+/// Whether a block is exactly symmetric and positive semidefinite (all principal minors `>= 0`).
+fn symmetric_psd(m: &Mat3) -> bool {
+    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+    // Column-major: m[r][c] = col(c)[r].
+    if a.y != b.x || a.z != c.x || b.z != c.y {
+        return false;
+    }
+    let (d0, d1, d2) = (a.x, b.y, c.z);
+    d0 >= 0.0
+        && d1 >= 0.0
+        && d2 >= 0.0
+        && d0 * d1 - a.y * a.y >= 0.0
+        && d0 * d2 - a.z * a.z >= 0.0
+        && d1 * d2 - b.z * b.z >= 0.0
+        && m.determinant() >= 0.0
 }
 
 fn frob2(m: &Mat3) -> f64 {
@@ -377,6 +426,7 @@ fn smoothed_prolongator(a: &Csr, dinv: &[Mat3], agg: &[u32], nc: usize, omega: f
         row_start: Vec::with_capacity(n + 1),
         cols: Vec::new(),
         vals: Vec::new(),
+        dnorm: Vec::new(),
     };
     p.row_start.push(0);
     for i in 0..n {
@@ -801,4 +851,62 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         *xi += *ci;
     }
     l.backward_sweep();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::PatternBuilder;
+
+    /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
+    /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
+    /// matrix keeps its action on translations, and stays SPD (Cholesky of the dense copy).
+    #[test]
+    fn weak_positive_couplings_are_lumped_and_translations_kept() {
+        let mut p = PatternBuilder::new();
+        for (i, j) in [(0, 1), (1, 2), (0, 2), (0, 3)] {
+            p.couple(i, j);
+        }
+        let mut a = p.build(4);
+        let spring = |a: &mut BlockCsr, i: u32, j: u32, k: Mat3| {
+            a.add(i, i, k);
+            a.add(j, j, k);
+            a.add(i, j, -k);
+            a.add(j, i, -k);
+        };
+        let d = Vec3::new(1.0, 0.2, -0.1).normalize();
+        let k = Mat3::from_cols(d * d.x, d * d.y, d * d.z) + Mat3::IDENTITY * 0.1;
+        spring(&mut a, 0, 1, k);
+        spring(&mut a, 1, 2, k);
+        spring(&mut a, 0, 3, k * 1e-5);
+        // Bending-like: energy c |x0 - 2 x1 + x2|^2 / 2 gives +c on the (0, 2) blocks.
+        let c = 1e-5;
+        let w = [1.0, -2.0, 1.0];
+        for (ia, wa) in w.iter().enumerate() {
+            for (ib, wb) in w.iter().enumerate() {
+                a.add(ia as u32, ib as u32, Mat3::IDENTITY * (c * wa * wb));
+            }
+        }
+        a.add_diagonal(&[1e-3; 4]);
+        let mut f = Csr::default();
+        f.filtered(&a, &[Filter::Free; 4]);
+        let cols: Vec<Vec<u32>> = (0..4).map(|r| f.row(r).0.to_vec()).collect();
+        assert_eq!(
+            cols[0],
+            vec![0, 1, 3],
+            "(0, 2) lumped, weak spring (0, 3) kept"
+        );
+        assert_eq!(cols[2], vec![1, 2]);
+        // Same product with every translation.
+        for t in [Vec3::X, Vec3::Y, Vec3::new(0.3, -1.0, 2.0)] {
+            let x = vec![t; 4];
+            let (mut y0, mut y1) = (vec![Vec3::ZERO; 4], vec![Vec3::ZERO; 4]);
+            a.mul(&x, &mut y0);
+            f.mul(&x, &mut y1);
+            for (u, v) in y0.iter().zip(&y1) {
+                assert!((*u - *v).length() <= 1e-15, "{u} vs {v}");
+            }
+        }
+        assert!(Dense::factor(&f).is_ok());
+    }
 }
