@@ -723,8 +723,10 @@ mod tests {
             mg.apply(&u, &mut mu);
             mg.apply(&v, &mut mv);
             let (vmu, umv) = (dot(&v, &mu), dot(&u, &mv));
+            // Symmetric in exact arithmetic; the hierarchy is single precision, so up to
+            // ~100 f32 ulps (1.2e-5; measured 3e-7). A one-sided smoother is off by ~1e-1.
             assert!(
-                (vmu - umv).abs() <= 1e-10 * vmu.abs().max(umv.abs()),
+                (vmu - umv).abs() <= 1e-5 * vmu.abs().max(umv.abs()),
                 "{vmu} vs {umv}"
             );
             assert!(dot(&u, &mu) > 0.0);
@@ -750,8 +752,10 @@ mod tests {
             mg.apply(&u, &mut mu);
             mg.apply(&v, &mut mv);
             let (vmu, umv) = (dot(&v, &mu), dot(&u, &mv));
+            // Symmetric in exact arithmetic; the hierarchy is single precision, so up to
+            // ~100 f32 ulps (1.2e-5; measured 3e-7). A one-sided smoother is off by ~1e-1.
             assert!(
-                (vmu - umv).abs() <= 1e-10 * vmu.abs().max(umv.abs()),
+                (vmu - umv).abs() <= 1e-5 * vmu.abs().max(umv.abs()),
                 "{vmu} vs {umv}"
             );
             assert!(dot(&u, &mu) > 0.0);
