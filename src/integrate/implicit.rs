@@ -485,7 +485,8 @@ impl Integrator for Implicit {
                 self.xk[i] = x[i] + self.vk[i] * h;
             }
             let check = self.energy_check(d, t + h, h, v, u0);
-            if check.accepted() {
+            // A non-finite iterate is the divergence guard's case, not Newton's.
+            if check.accepted() || !check.created.is_finite() {
                 break;
             }
             // Keep the iterate that created the least energy in case none is accepted.
