@@ -77,6 +77,8 @@ const ROUND_OFF: f64 = 1e-12;
 struct EnergyCheck {
     created: f64,
     allowed: f64,
+    /// Potential energy at the iterate's end positions.
+    u1: f64,
 }
 
 impl EnergyCheck {
@@ -234,6 +236,8 @@ pub struct Implicit {
     xk: Vec<Vec3>,
     vk: Vec<Vec3>,
     delta: Vec<Vec3>,
+    /// Potential energy at the end positions of the last step (still in `xk`).
+    end_potential: Option<f64>,
     /// The least energy-creating Newton iterate so far.
     best: Vec<Vec3>,
 }
@@ -260,6 +264,7 @@ impl Implicit {
             xk: Vec::new(),
             vk: Vec::new(),
             delta: Vec::new(),
+            end_potential: None,
             best: Vec::new(),
         }
     }
@@ -366,6 +371,7 @@ impl Implicit {
             self.b[i] = -g;
         }
         EnergyCheck {
+            u1,
             created: (ke1 + u1) - (ke0 + u0) - w_other - w_constraint,
             allowed: CREATED_ENERGY * (ke0 + ke1) + ROUND_OFF * (ke0 + ke1 + u0.abs() + u1.abs()),
         }
@@ -441,6 +447,7 @@ impl Integrator for Implicit {
         self.dfdv = Some(m.clone());
         self.a = Some(m);
         self.hierarchy = None;
+        self.end_potential = None;
     }
 
     fn step(
@@ -476,7 +483,13 @@ impl Integrator for Implicit {
 
         // Newton iterations on the nonlinear backward-Euler system, only while the step creates
         // energy (see `EnergyCheck`).
-        let u0 = potential(d, x);
+        // The potential at `x` is known when `x` is exactly where the last step ended (nothing
+        // moved it since: no collision response, no kinematic reset off it).
+        let u0 = match self.end_potential {
+            Some(u) if self.xk.as_slice() == &x[..] => u,
+            _ => potential(d, x),
+        };
+        self.end_potential = None;
         let mut newton = 0;
         let mut best: Option<f64> = None;
         loop {
@@ -487,6 +500,7 @@ impl Integrator for Implicit {
             let check = self.energy_check(d, t + h, h, v, u0);
             // A non-finite iterate is the divergence guard's case, not Newton's.
             if check.accepted() || !check.created.is_finite() {
+                self.end_potential = check.accepted().then_some(check.u1);
                 break;
             }
             // Keep the iterate that created the least energy in case none is accepted.
