@@ -130,6 +130,13 @@ struct PositionForces {
     valid: bool,
 }
 
+impl PositionForces {
+    /// Whether the cached forces are those at exactly `x`.
+    fn hit(&self, x: &[Vec3]) -> bool {
+        self.valid && self.f.len() == x.len() && self.x.as_slice() == x
+    }
+}
+
 /// Vertex count from which the energy-and-force pass is split in two halves run on two threads
 /// (below it, waking a thread costs about as much as the pass). The split depends on the size
 /// only, so results do not depend on the number of threads.
@@ -203,12 +210,37 @@ impl EffectSet {
     pub fn forces(&self, s: &State, f: &mut [Vec3]) {
         let cached = {
             let cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
-            let hit = cache.valid && cache.f.len() == f.len() && cache.x.as_slice() == s.x;
+            let hit = cache.hit(s.x);
             if hit {
                 f.copy_from_slice(&cache.f);
             }
             hit
         };
+        self.add_uncached(s, f, cached);
+    }
+
+    /// [`EffectSet::forces`] for the last consumer of the forces at these positions (the
+    /// integrator): a cached result is handed over by swapping buffers instead of copied, which
+    /// spends the cache. `f` is resized to the vertex count.
+    pub fn take_forces(&self, s: &State, f: &mut Vec<Vec3>) {
+        let cached = {
+            let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+            let hit = cache.hit(s.x);
+            if hit {
+                std::mem::swap(&mut cache.f, f);
+                cache.valid = false;
+            }
+            hit
+        };
+        if !cached {
+            crate::integrate::scratch(f, s.x.len());
+        }
+        self.add_uncached(s, f, cached);
+    }
+
+    /// Completes `f` with the effects the cache does not hold (all of them, zeroing `f` first,
+    /// when `cached` is false).
+    fn add_uncached(&self, s: &State, f: &mut [Vec3], cached: bool) {
         if !cached {
             f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         }

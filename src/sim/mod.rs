@@ -476,8 +476,12 @@ impl Simulation {
         };
         let (e0_total, e0_dynamic) = (e0.total(), e0.dynamic());
         let external = self.external_work_rate(t);
-        self.x_save.clone_from(&self.cloth.x);
-        self.v_save.clone_from(&self.cloth.v);
+        // The start state moves to the save buffers (a swap, not a copy) and the integrator
+        // writes the end state into the cloth's buffers.
+        std::mem::swap(&mut self.x_save, &mut self.cloth.x);
+        std::mem::swap(&mut self.v_save, &mut self.cloth.v);
+        crate::integrate::scratch(&mut self.cloth.x, n);
+        crate::integrate::scratch(&mut self.cloth.v, n);
 
         // 2. Integrate.
         let stats: IntegratorStats = {
@@ -486,8 +490,9 @@ impl Simulation {
                 mass: &self.cloth.mass,
                 constraints: &self.constraints,
             };
+            let start = (self.x_save.as_slice(), self.v_save.as_slice());
             self.integrator
-                .step(&d, t, h, &mut self.cloth.x, &mut self.cloth.v)
+                .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
         };
         m.force_evaluations += stats.force_evaluations;
         m.cg_iterations += stats.cg_iterations;
@@ -511,8 +516,8 @@ impl Simulation {
                 self.substep_count += 1;
             }
             Err((vertex, symptom)) => {
-                self.cloth.x.clone_from(&self.x_save);
-                self.cloth.v.clone_from(&self.v_save);
+                std::mem::swap(&mut self.cloth.x, &mut self.x_save);
+                std::mem::swap(&mut self.cloth.v, &mut self.v_save);
                 self.energy_cache = Some(e0);
                 let g = self.settings.guard;
                 if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
