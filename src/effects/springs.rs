@@ -83,15 +83,75 @@ fn forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64], boun
     unsafe { forces_energy_blocks(x, f, springs, k) }
 }
 
-/// [`forces_energy_blocks`] compiled for AVX2 (4 f64 lanes per instruction). Rust never fuses a
-/// multiply and an add on its own, so the lanes round exactly as the baseline code does.
+/// [`forces_energy_blocks`] with the lane arithmetic in AVX registers (4 f64 lanes). Each lane
+/// does the scalar code's operations in the same order, without fused multiply-adds, so the
+/// forces are bitwise those of the scalar loop (only the energy's summation order differs).
 ///
 /// Safety: AVX2 is available, and the contract of [`forces_energy_blocks`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn forces_energy_avx2(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
-    // SAFETY: forwarded from the caller.
-    unsafe { forces_energy_blocks(x, f, springs, k) }
+    use std::arch::x86_64::*;
+    let mut energy = _mm256_setzero_pd();
+    let (zero, half) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5));
+    for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
+        let (mut dx, mut dy, mut dz, mut rest) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        for l in 0..LANES {
+            let s = &sb[l];
+            // SAFETY: indices below x.len() (function contract).
+            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
+            (dx[l], dy[l], dz[l], rest[l]) = (d.x, d.y, d.z, s.rest);
+        }
+        let mut scale = [0.0; 4];
+        // SAFETY: unaligned loads and stores of local 4-element arrays.
+        unsafe {
+            let (vx, vy, vz) = (
+                _mm256_loadu_pd(dx.as_ptr()),
+                _mm256_loadu_pd(dy.as_ptr()),
+                _mm256_loadu_pd(dz.as_ptr()),
+            );
+            let kv = _mm256_loadu_pd(kb.as_ptr());
+            let len2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
+                _mm256_mul_pd(vz, vz),
+            );
+            let len = _mm256_sqrt_pd(len2);
+            let e = _mm256_sub_pd(len, _mm256_loadu_pd(rest.as_ptr()));
+            // -k e / len, zeroed where len = 0 (coincident endpoints: no direction, no force).
+            let q = _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(zero, kv), e), len);
+            let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(len, zero);
+            _mm256_storeu_pd(scale.as_mut_ptr(), _mm256_and_pd(q, positive));
+            let el = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, kv), e), e);
+            energy = _mm256_add_pd(energy, el);
+        }
+        for l in 0..LANES {
+            let s = &sb[l];
+            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
+            // SAFETY: indices below f.len() (function contract).
+            unsafe {
+                *f.get_unchecked_mut(s.i as usize) += fi;
+                *f.get_unchecked_mut(s.j as usize) -= fi;
+            }
+        }
+    }
+    let mut lanes = [0.0; 4];
+    // SAFETY: store to a local 4-element array.
+    unsafe { _mm256_storeu_pd(lanes.as_mut_ptr(), energy) };
+    let tail = springs.len() / LANES * LANES;
+    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail_energy
+}
+
+/// Springs that do not fill a block, one by one (bounds-checked).
+fn tail_forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
+    let mut energy = 0.0;
+    for (s, &kl) in springs.iter().zip(k) {
+        let (fi, e) = tension(x, s, kl);
+        f[s.i as usize] += fi;
+        f[s.j as usize] -= fi;
+        energy += 0.5 * kl * e * e;
+    }
+    energy
 }
 
 /// The block loop. Safety: every spring index is below `x.len()` and `f.len()`.
@@ -125,13 +185,7 @@ unsafe fn forces_energy_blocks(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k
         }
     }
     let tail = springs.len() / LANES * LANES;
-    let mut tail_energy = 0.0;
-    for (s, &kl) in springs[tail..].iter().zip(&k[tail..]) {
-        let (fi, e) = tension(x, s, kl);
-        f[s.i as usize] += fi;
-        f[s.j as usize] -= fi;
-        tail_energy += 0.5 * kl * e * e;
-    }
+    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
     (energy[0] + energy[1]) + (energy[2] + energy[3]) + tail_energy
 }
 

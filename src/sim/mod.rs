@@ -149,6 +149,9 @@ pub struct Simulation {
     time: f64,
     /// Energy of the current state, if known (saves one evaluation per substep).
     energy_cache: Option<Energies>,
+    /// Largest squared vertex speed of the current state when the guard's scan measured it
+    /// (cleared by anything that changes velocities after the scan, e.g. collisions).
+    scanned_speed2: Option<f64>,
     /// Dynamic energy of the last substeps: the guard's reference level, so that the bounded
     /// energy oscillation of a stable symplectic step is not mistaken for a blow-up.
     recent_energy: [f64; 16],
@@ -192,6 +195,7 @@ impl Simulation {
             constraints: Constraints::free(n),
             time: 0.0,
             energy_cache: None,
+            scanned_speed2: None,
             recent_energy: [0.0; 16],
             energy_budget: None,
             budget_scale: 0.0,
@@ -391,6 +395,7 @@ impl Simulation {
         let n_sub = self.settings.substeps.max(1);
         let h = self.settings.dt / n_sub as f64;
         let t0 = self.time;
+        self.scanned_speed2 = None;
         for f in 0..self.frames.len() {
             if let Some(script) = &self.frames.script[f] {
                 self.frames.end[f] = script(t0 + self.settings.dt);
@@ -415,13 +420,13 @@ impl Simulation {
         m.time = self.time;
         m.kinetic_energy = ke;
         m.potential_energy = pe;
-        m.max_speed = self
-            .cloth
-            .v
-            .iter()
-            .map(|v| v.length_squared())
-            .fold(0.0, f64::max)
-            .sqrt();
+        let speed2 = match self.scanned_speed2 {
+            Some(s2) => s2,
+            None => (self.cloth.v.iter())
+                .map(|v| v.length_squared())
+                .fold(0.0, f64::max),
+        };
+        m.max_speed = speed2.sqrt();
         m.wall_time_s = wall.elapsed().as_secs_f64();
         self.last = m;
         Ok(&self.last)
@@ -505,7 +510,8 @@ impl Simulation {
 
         // 4. Guard.
         match self.check(h, e0, external.then_some(self.fext.as_slice())) {
-            Ok((e1, spent)) => {
+            Ok((e1, spent, speed2)) => {
+                self.scanned_speed2 = Some(speed2);
                 if self.energy_budget.is_none() {
                     self.budget_scale = e0_dynamic;
                 }
@@ -566,6 +572,7 @@ impl Simulation {
                 *budget += (after.total() - b.total()).max(0.0);
             }
             self.energy_cache = Some(after);
+            self.scanned_speed2 = None;
         }
         m.substeps += 1;
         Ok(())
@@ -686,27 +693,28 @@ impl Simulation {
         h: f64,
         e0: Energies,
         fext: Option<&[Vec3]>,
-    ) -> Result<(Energies, f64), (usize, Symptom)> {
+    ) -> Result<(Energies, f64, f64), (usize, Symptom)> {
         let c = &self.cloth;
         let g = &self.settings.guard;
-        // One pass over the vertices: finiteness, the fastest vertex, the kinetic energy and the
-        // speed sum of the gravity error bound.
-        let (mut fastest, mut speed2, mut kinetic, mut mass_speed) = (0, 0.0, 0.0, 0.0);
-        for i in 0..c.len() {
-            let (v, m) = (c.v[i], c.mass[i]);
-            if !c.x[i].is_finite() || !v.is_finite() {
+        // One pass over the vertices: finiteness, the fastest speed, the kinetic energy, the
+        // speed sum of the gravity error bound and the total mass.
+        let scan = guard::scan_vertices(&c.x, &c.v, &self.v_save, &c.mass);
+        if !scan.finite {
+            let bad = (0..c.len()).find(|&i| !c.x[i].is_finite() || !c.v[i].is_finite());
+            if let Some(i) = bad {
                 return Err((i, Symptom::NonFinite));
             }
-            let v2 = v.length_squared();
-            if v2 > speed2 {
-                (fastest, speed2) = (i, v2);
-            }
-            kinetic += 0.5 * m * v2;
-            mass_speed += m * v2.max(self.v_save[i].length_squared()).sqrt();
         }
-        let speed = speed2.sqrt();
+        // The first vertex at the top speed: only looked up when a check fails.
+        let fastest = || {
+            (0..c.len())
+                .find(|&i| c.v[i].length_squared() == scan.speed2)
+                .unwrap_or(0)
+        };
+        let (mut kinetic, mass_speed) = (scan.kinetic, scan.mass_speed);
+        let speed = scan.speed2.sqrt();
         if speed > g.max_speed {
-            return Err((fastest, Symptom::Speed(speed)));
+            return Err((fastest(), Symptom::Speed(speed)));
         }
         for (i, _) in &c.kinematic {
             kinetic -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
@@ -719,7 +727,7 @@ impl Simulation {
         };
         let (e0_total, e0_dynamic, e1_total) = (e0.total(), e0.dynamic(), e1.total());
         if !e1_total.is_finite() {
-            return Err((fastest, Symptom::NonFinite));
+            return Err((fastest(), Symptom::NonFinite));
         }
         let work: f64 = match fext {
             Some(f) => (0..c.len())
@@ -729,13 +737,12 @@ impl Simulation {
         };
         let gravity = self.effects.gravity().length();
         let gravity_error = h * gravity * mass_speed;
-        let total_mass: f64 = c.mass.iter().sum();
-        let floor = 1e-12 * (1.0 + total_mass);
+        let floor = 1e-12 * (1.0 + scan.mass);
         let reference = self.recent_energy.iter().fold(e0_dynamic, |a, &b| a.max(b));
         let allowed = work + g.energy_growth * reference + gravity_error + floor;
         let gained = e1_total - e0_total;
         if gained > allowed {
-            return Err((fastest, Symptom::EnergyGain { gained, allowed }));
+            return Err((fastest(), Symptom::EnergyGain { gained, allowed }));
         }
         let spent = work + gravity_error + floor;
         let budget = self.energy_budget.unwrap_or(e0_total) + spent;
@@ -747,14 +754,14 @@ impl Simulation {
         let over = e1_total - budget;
         if over > g.energy_growth * scale + floor {
             return Err((
-                fastest,
+                fastest(),
                 Symptom::EnergyGain {
                     gained: over,
                     allowed: g.energy_growth * scale,
                 },
             ));
         }
-        Ok((e1, spent))
+        Ok((e1, spent, scan.speed2))
     }
 
     fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
