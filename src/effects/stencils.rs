@@ -16,19 +16,48 @@ pub struct StencilSet<const N: usize> {
     stencils: Vec<Stencil<N>>,
     c: Vec<f64>,
     parameter: String,
-    /// One past the largest vertex index, checked once per force pass against the slices so that
-    /// the pass indexes without per-stencil bounds checks.
-    vertex_bound: usize,
+    /// The stencils grouped into runs for the force pass.
+    runs: Vec<Run<N>>,
 }
 
-/// One past the largest vertex index of `stencils`.
-fn vertex_bound<const N: usize>(stencils: &[Stencil<N>]) -> usize {
-    stencils
-        .iter()
-        .flat_map(|s| s.idx)
-        .map(|i| i as usize + 1)
-        .max()
-        .unwrap_or(0)
+/// Consecutive stencils with the same weights and rigidity whose vertex indices all step by one
+/// from a stencil to the next (on a lattice, a row of warp stencils or all weft stencils): the
+/// force pass treats a run as contiguous slices of positions and forces, loops the compiler
+/// vectorises, with no index lookups.
+#[derive(Debug, Clone, PartialEq)]
+struct Run<const N: usize> {
+    /// Index of the run's first stencil.
+    first: usize,
+    len: usize,
+    /// Vertex indices of the first stencil.
+    idx: [usize; N],
+    w: [f64; N],
+    c: f64,
+}
+
+/// Groups `stencils` into maximal runs (see [`Run`]).
+fn runs<const N: usize>(stencils: &[Stencil<N>], c: &[f64]) -> Vec<Run<N>> {
+    let mut out: Vec<Run<N>> = Vec::new();
+    for (k, (s, &ck)) in stencils.iter().zip(c).enumerate() {
+        let idx = s.idx.map(|i| i as usize);
+        if let Some(r) = out.last_mut() {
+            let continues = r.w == s.w
+                && r.c.to_bits() == ck.to_bits()
+                && (0..N).all(|a| idx[a] == r.idx[a] + r.len);
+            if continues {
+                r.len += 1;
+                continue;
+            }
+        }
+        out.push(Run {
+            first: k,
+            len: 1,
+            idx,
+            w: s.w,
+            c: ck,
+        });
+    }
+    out
 }
 
 /// Second derivative along warp and/or weft.
@@ -40,7 +69,7 @@ impl Bending {
     pub fn new(stencils: Vec<Stencil<3>>, rigidity: Vec<f64>, parameter: String) -> Self {
         StencilSet {
             name: "bending",
-            vertex_bound: vertex_bound(&stencils),
+            runs: runs(&stencils, &rigidity),
             stencils,
             c: rigidity,
             parameter,
@@ -52,7 +81,7 @@ impl Twist {
     pub fn new(stencils: Vec<Stencil<4>>, rigidity: Vec<f64>, parameter: String) -> Self {
         StencilSet {
             name: "twist",
-            vertex_bound: vertex_bound(&stencils),
+            runs: runs(&stencils, &rigidity),
             stencils,
             c: rigidity,
             parameter,
@@ -67,25 +96,17 @@ impl<const N: usize> StencilSet<N> {
         }
     }
 
-    /// Adds the forces `-c w_k d` and returns the energy `sum c/2 |d|^2`, `d = sum_k w_k x_k`.
+    /// Adds the forces `-c w_k d` and returns the energy `sum c/2 |d|^2`, `d = sum_k w_k x_k`,
+    /// of the `part`-th of `parts` slices of the stencils.
     fn add_forces(&self, x: &[Vec3], f: &mut [Vec3], part: usize, parts: usize) -> f64 {
         let r = super::part_range(self.stencils.len(), part, parts);
-        let (stencils, c) = (&self.stencils[r.clone()], &self.c[r]);
-        assert!(
-            x.len() >= self.vertex_bound && f.len() >= self.vertex_bound,
-            "{} stencils reach vertex {} but the state has {} positions and {} forces",
-            self.name,
-            self.vertex_bound.saturating_sub(1),
-            x.len(),
-            f.len()
-        );
+        let (x, f) = (flat(x), flat_mut(f));
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2 (checked just above); indices were checked above.
-            return unsafe { forces_energy_avx2(x, f, stencils, c) };
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { runs_forces_energy_avx2(x, f, &self.runs, r) };
         }
-        // SAFETY: every index is below `vertex_bound`, checked above against both slices.
-        unsafe { forces_energy(x, f, stencils, c) }
+        runs_forces_energy(x, f, &self.runs, r)
     }
 
     fn add_jacobians(&self, dfdx: &mut BlockCsr) {
@@ -134,45 +155,89 @@ impl<const N: usize> StencilSet<N> {
     }
 }
 
-/// [`forces_energy`] compiled for AVX2. Rust never fuses a multiply and an add on its own, so the
-/// results are bitwise those of the baseline code.
-///
-/// Safety: AVX2 is available, and the contract of [`forces_energy`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn forces_energy_avx2<const N: usize>(
-    x: &[Vec3],
-    f: &mut [Vec3],
-    stencils: &[Stencil<N>],
-    c: &[f64],
-) -> f64 {
-    // SAFETY: forwarded from the caller.
-    unsafe { forces_energy(x, f, stencils, c) }
+/// Positions or forces as one flat `[x0, y0, z0, x1, ...]` slice.
+fn flat(v: &[Vec3]) -> &[f64] {
+    const _: () = assert!(std::mem::size_of::<Vec3>() == 3 * std::mem::size_of::<f64>());
+    // SAFETY: `Vec3` (glam's DVec3) is `#[repr(C)]` with three f64 fields and no padding (size
+    // checked above), so `v` is `3 v.len()` contiguous, initialised, aligned f64 values.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<f64>(), 3 * v.len()) }
 }
 
-/// The stencil loop. Safety: every stencil index is below `x.len()` and `f.len()`.
-#[inline(always)]
-unsafe fn forces_energy<const N: usize>(
-    x: &[Vec3],
-    f: &mut [Vec3],
-    stencils: &[Stencil<N>],
-    c: &[f64],
+/// Mutable [`flat`].
+fn flat_mut(v: &mut [Vec3]) -> &mut [f64] {
+    // SAFETY: as in `flat`; the result borrows `v` mutably and exclusively.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<f64>(), 3 * v.len()) }
+}
+
+/// [`runs_forces_energy`] compiled for AVX2 (4 f64 lanes). Rust never fuses a multiply and an add
+/// on its own, so the results are bitwise those of the baseline build.
+///
+/// Safety: AVX2 is available.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn runs_forces_energy_avx2<const N: usize>(
+    x: &[f64],
+    f: &mut [f64],
+    runs: &[Run<N>],
+    range: std::ops::Range<usize>,
 ) -> f64 {
-    // Two accumulators (even and odd stencils) shorten the dependency chain of the sum.
-    let mut energy = [0.0; 2];
-    for (k, (s, &c)) in stencils.iter().zip(c).enumerate() {
-        let mut d = Vec3::ZERO;
-        for k in 0..N {
-            // SAFETY: indices below x.len() (function contract).
-            d += unsafe { *x.get_unchecked(s.idx[k] as usize) } * s.w[k];
+    runs_forces_energy(x, f, runs, range)
+}
+
+/// Stencils per chunk of a run (the chunk's differences `d` live on the stack).
+const CHUNK: usize = 64;
+
+/// Forces and energy of the stencils with indices in `range`, run by run, on flat positions `x`
+/// and forces `f`. Per stencil the arithmetic is that of the plain loop (`d = sum w_k x_k` in
+/// order, `f_k -= d (c w_k)`); only the order in which contributions reach a vertex, and the
+/// energy's summation order, differ.
+#[inline(always)]
+fn runs_forces_energy<const N: usize>(
+    x: &[f64],
+    f: &mut [f64],
+    runs: &[Run<N>],
+    range: std::ops::Range<usize>,
+) -> f64 {
+    let mut energy = 0.0;
+    let mut d = [0.0; 3 * CHUNK];
+    for run in runs {
+        // The part of this run inside `range`.
+        let lo = range.start.max(run.first);
+        let hi = range.end.min(run.first + run.len);
+        let mut start = lo;
+        while start < hi {
+            let m = CHUNK.min(hi - start);
+            let (d, at) = (&mut d[..3 * m], 3 * (start - run.first));
+            let span = |k: usize| 3 * run.idx[k] + at..3 * run.idx[k] + at + 3 * m;
+            let x0 = &x[span(0)];
+            for (dj, &xj) in d.iter_mut().zip(x0) {
+                *dj = 0.0 + xj * run.w[0];
+            }
+            for k in 1..N {
+                let wk = run.w[k];
+                for (dj, &xj) in d.iter_mut().zip(&x[span(k)]) {
+                    *dj += xj * wk;
+                }
+            }
+            for k in 0..N {
+                let cw = run.c * run.w[k];
+                for (fj, &dj) in f[span(k)].iter_mut().zip(d.iter()) {
+                    *fj -= dj * cw;
+                }
+            }
+            let mut sq = [0.0; 4];
+            let quads = d.chunks_exact(4);
+            let rest: f64 = quads.remainder().iter().map(|v| v * v).sum();
+            for q in quads {
+                for l in 0..4 {
+                    sq[l] += q[l] * q[l];
+                }
+            }
+            energy += 0.5 * run.c * ((sq[0] + sq[1]) + (sq[2] + sq[3]) + rest);
+            start += m;
         }
-        for k in 0..N {
-            // SAFETY: indices below f.len() (function contract).
-            unsafe { *f.get_unchecked_mut(s.idx[k] as usize) -= d * (c * s.w[k]) };
-        }
-        energy[k & 1] += 0.5 * c * d.length_squared();
     }
-    energy[0] + energy[1]
+    energy
 }
 
 impl<const N: usize> Effect for StencilSet<N> {
