@@ -4,6 +4,7 @@
 //! `-k [n n^T + (1 - l/L)(I - n n^T)]`, with the transverse term clamped at zero under compression
 //! (Choi and Ko): keeping it would make the system matrix indefinite and break conjugate gradients.
 
+use super::spring_runs::SpringLayout;
 use super::{outer, Effect, State, StiffnessBound};
 use crate::cloth::topology::Spring;
 use crate::integrate::{BlockCsr, PatternBuilder};
@@ -13,9 +14,8 @@ pub struct Springs {
     name: &'static str,
     springs: Vec<Spring>,
     k: Vec<f64>,
-    /// One past the largest vertex index: the force pass checks it once against the slices and
-    /// then indexes without per-spring bounds checks.
-    vertex_bound: usize,
+    /// The same springs regrouped for the force pass.
+    layout: SpringLayout,
     /// Scene parameter per spring group, for diagnostics.
     parameter: String,
 }
@@ -24,16 +24,12 @@ impl Springs {
     /// `name` is the effect's scene name (`stretch`, `shear`, `skip_one`); `k` is per spring.
     pub fn new(name: &'static str, springs: Vec<Spring>, k: Vec<f64>, parameter: String) -> Self {
         debug_assert_eq!(springs.len(), k.len());
-        let vertex_bound = springs
-            .iter()
-            .map(|s| s.i.max(s.j) as usize + 1)
-            .max()
-            .unwrap_or(0);
+        let layout = SpringLayout::new(&springs, &k);
         Self {
             name,
             springs,
             k,
-            vertex_bound,
+            layout,
             parameter,
         }
     }
@@ -45,148 +41,6 @@ impl Springs {
     pub fn is_empty(&self) -> bool {
         self.springs.is_empty()
     }
-}
-
-/// Force on `i` and the extension `L - l` of one spring. Coincident endpoints have no direction
-/// and, by symmetry, no net force (branch-free: the select compiles to a conditional move).
-#[inline(always)]
-fn tension(x: &[Vec3], s: &Spring, k: f64) -> (Vec3, f64) {
-    let d = x[s.i as usize] - x[s.j as usize];
-    let len = d.length();
-    let e = len - s.rest;
-    let scale = if len > 0.0 { -k * e / len } else { 0.0 };
-    (d * scale, e)
-}
-
-/// Springs per block of the force pass: their arithmetic runs in SIMD lanes, the gathers and
-/// scatters around it stay in spring order (so the forces are bitwise those of a plain loop).
-const LANES: usize = 4;
-
-/// Adds the forces of `springs` (stiffness `k`) to `f` and returns their energy.
-///
-/// Every index of `springs` is below `bound` (computed at construction); `x` and `f` are checked
-/// against `bound` once here, which is what makes the unchecked indexing below sound.
-fn forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64], bound: usize) -> f64 {
-    assert!(
-        x.len() >= bound && f.len() >= bound && springs.len() == k.len(),
-        "springs reach vertex {} but the state has {} positions and {} forces",
-        bound.saturating_sub(1),
-        x.len(),
-        f.len()
-    );
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above); indices were checked above.
-        return unsafe { forces_energy_avx2(x, f, springs, k) };
-    }
-    // SAFETY: every index is below `bound`, checked above against both slices.
-    unsafe { forces_energy_blocks(x, f, springs, k) }
-}
-
-/// [`forces_energy_blocks`] with the lane arithmetic in AVX registers (4 f64 lanes). Each lane
-/// does the scalar code's operations in the same order, without fused multiply-adds, so the
-/// forces are bitwise those of the scalar loop (only the energy's summation order differs).
-///
-/// Safety: AVX2 is available, and the contract of [`forces_energy_blocks`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn forces_energy_avx2(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
-    use std::arch::x86_64::*;
-    let mut energy = _mm256_setzero_pd();
-    let (zero, half) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5));
-    for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
-        let (mut dx, mut dy, mut dz, mut rest) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
-        for l in 0..LANES {
-            let s = &sb[l];
-            // SAFETY: indices below x.len() (function contract).
-            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
-            (dx[l], dy[l], dz[l], rest[l]) = (d.x, d.y, d.z, s.rest);
-        }
-        let mut scale = [0.0; 4];
-        // SAFETY: unaligned loads and stores of local 4-element arrays.
-        unsafe {
-            let (vx, vy, vz) = (
-                _mm256_loadu_pd(dx.as_ptr()),
-                _mm256_loadu_pd(dy.as_ptr()),
-                _mm256_loadu_pd(dz.as_ptr()),
-            );
-            let kv = _mm256_loadu_pd(kb.as_ptr());
-            let len2 = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
-                _mm256_mul_pd(vz, vz),
-            );
-            let len = _mm256_sqrt_pd(len2);
-            let e = _mm256_sub_pd(len, _mm256_loadu_pd(rest.as_ptr()));
-            // -k e / len, zeroed where len = 0 (coincident endpoints: no direction, no force).
-            let q = _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(zero, kv), e), len);
-            let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(len, zero);
-            _mm256_storeu_pd(scale.as_mut_ptr(), _mm256_and_pd(q, positive));
-            let el = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, kv), e), e);
-            energy = _mm256_add_pd(energy, el);
-        }
-        for l in 0..LANES {
-            let s = &sb[l];
-            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
-            // SAFETY: indices below f.len() (function contract).
-            unsafe {
-                *f.get_unchecked_mut(s.i as usize) += fi;
-                *f.get_unchecked_mut(s.j as usize) -= fi;
-            }
-        }
-    }
-    let mut lanes = [0.0; 4];
-    // SAFETY: store to a local 4-element array.
-    unsafe { _mm256_storeu_pd(lanes.as_mut_ptr(), energy) };
-    let tail = springs.len() / LANES * LANES;
-    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
-    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail_energy
-}
-
-/// Springs that do not fill a block, one by one (bounds-checked).
-fn tail_forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
-    let mut energy = 0.0;
-    for (s, &kl) in springs.iter().zip(k) {
-        let (fi, e) = tension(x, s, kl);
-        f[s.i as usize] += fi;
-        f[s.j as usize] -= fi;
-        energy += 0.5 * kl * e * e;
-    }
-    energy
-}
-
-/// The block loop. Safety: every spring index is below `x.len()` and `f.len()`.
-#[inline(always)]
-unsafe fn forces_energy_blocks(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
-    let mut energy = [0.0; LANES];
-    for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
-        let (mut dx, mut dy, mut dz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
-            let s = &sb[l];
-            // SAFETY: indices below x.len() (function contract).
-            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
-            (dx[l], dy[l], dz[l]) = (d.x, d.y, d.z);
-        }
-        let mut scale = [0.0; LANES];
-        for l in 0..LANES {
-            let (kl, rest) = (kb[l], sb[l].rest);
-            let len = (dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l]).sqrt();
-            let e = len - rest;
-            scale[l] = if len > 0.0 { -kl * e / len } else { 0.0 };
-            energy[l] += 0.5 * kl * e * e;
-        }
-        for l in 0..LANES {
-            let s = &sb[l];
-            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
-            // SAFETY: indices below f.len() (function contract).
-            unsafe {
-                *f.get_unchecked_mut(s.i as usize) += fi;
-                *f.get_unchecked_mut(s.j as usize) -= fi;
-            }
-        }
-    }
-    let tail = springs.len() / LANES * LANES;
-    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
-    (energy[0] + energy[1]) + (energy[2] + energy[3]) + tail_energy
 }
 
 impl Effect for Springs {
@@ -205,11 +59,7 @@ impl Effect for Springs {
     }
 
     fn add_forces(&self, st: &State, f: &mut [Vec3]) {
-        for (s, &k) in self.springs.iter().zip(&self.k) {
-            let (fi, _) = tension(st.x, s, k);
-            f[s.i as usize] += fi;
-            f[s.j as usize] -= fi;
-        }
+        self.layout.forces_energy(st.x, f, 0, 1);
     }
 
     fn add_forces_energy(&self, st: &State, f: &mut [Vec3]) -> f64 {
@@ -217,14 +67,7 @@ impl Effect for Springs {
     }
 
     fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
-        let r = super::part_range(self.springs.len(), part, parts);
-        forces_energy(
-            st.x,
-            f,
-            &self.springs[r.clone()],
-            &self.k[r],
-            self.vertex_bound,
-        )
+        self.layout.forces_energy(st.x, f, part, parts)
     }
 
     fn add_jacobians(&self, st: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {

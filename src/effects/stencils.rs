@@ -100,7 +100,7 @@ impl<const N: usize> StencilSet<N> {
     /// of the `part`-th of `parts` slices of the stencils.
     fn add_forces(&self, x: &[Vec3], f: &mut [Vec3], part: usize, parts: usize) -> f64 {
         let r = super::part_range(self.stencils.len(), part, parts);
-        let (x, f) = (flat(x), flat_mut(f));
+        let (x, f) = (super::flat(x), super::flat_mut(f));
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).
@@ -153,20 +153,6 @@ impl<const N: usize> StencilSet<N> {
             parameter: self.parameter.clone(),
         })
     }
-}
-
-/// Positions or forces as one flat `[x0, y0, z0, x1, ...]` slice.
-fn flat(v: &[Vec3]) -> &[f64] {
-    const _: () = assert!(std::mem::size_of::<Vec3>() == 3 * std::mem::size_of::<f64>());
-    // SAFETY: `Vec3` (glam's DVec3) is `#[repr(C)]` with three f64 fields and no padding (size
-    // checked above), so `v` is `3 v.len()` contiguous, initialised, aligned f64 values.
-    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<f64>(), 3 * v.len()) }
-}
-
-/// Mutable [`flat`].
-fn flat_mut(v: &mut [Vec3]) -> &mut [f64] {
-    // SAFETY: as in `flat`; the result borrows `v` mutably and exclusively.
-    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<f64>(), 3 * v.len()) }
 }
 
 /// [`runs_forces_energy`] compiled for AVX2 (4 f64 lanes). Rust never fuses a multiply and an add

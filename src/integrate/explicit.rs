@@ -5,8 +5,9 @@
 //! without a copy.
 
 use super::{Dynamics, Integrator, IntegratorStats};
-use crate::effects::State;
+use crate::effects::{State, PAR_VERTICES};
 use crate::Vec3;
+use std::ops::Range;
 
 /// `x += h v(t); v += h a(t)`. First order; gains energy on any undamped oscillation, so it is here
 /// as the survey's baseline and for the accuracy study, not for production.
@@ -48,14 +49,19 @@ impl Integrator for ExplicitEuler {
         d.effects
             .take_forces(&State { t, x: x0, v: v0 }, &mut self.f);
         let inv_mass = self.inv_mass.of(d.mass);
-        let n = x0.len();
-        // Equal-length slices let the compiler drop the loop's bounds checks.
-        let (f, filter, inv_mass) = (&self.f[..n], &d.constraints.filter[..n], &inv_mass[..n]);
-        let (v0, x, v) = (&v0[..n], &mut x[..n], &mut v[..n]);
-        for i in 0..n {
-            x[i] = x0[i] + v0[i] * h;
-            v[i] = v0[i] + filter[i].apply(f[i] * inv_mass[i]) * h;
-        }
+        let (f, filter) = (&self.f[..], &d.constraints.filter[..]);
+        split_update(x, v, &|r, x, v| {
+            // Equal-length slices let the compiler drop the loop's bounds checks.
+            let n = x.len();
+            let (f, filter, inv_mass) = (&f[r.clone()], &filter[r.clone()], &inv_mass[r.clone()]);
+            let (x0, v0, v) = (&x0[r.clone()], &v0[r], &mut v[..n]);
+            let (f, filter, inv_mass, x0, v0) =
+                (&f[..n], &filter[..n], &inv_mass[..n], &x0[..n], &v0[..n]);
+            for i in 0..n {
+                x[i] = x0[i] + v0[i] * h;
+                v[i] = v0[i] + filter[i].apply(f[i] * inv_mass[i]) * h;
+            }
+        });
         IntegratorStats {
             force_evaluations: 1,
             ..Default::default()
@@ -108,15 +114,20 @@ impl Integrator for SymplecticEuler {
         d.effects
             .take_forces(&State { t, x: x0, v: v0 }, &mut self.f);
         let inv_mass = self.inv_mass.of(d.mass);
-        let n = x0.len();
-        // Equal-length slices let the compiler drop the loop's bounds checks.
-        let (f, filter, inv_mass) = (&self.f[..n], &d.constraints.filter[..n], &inv_mass[..n]);
-        let (v0, x, v) = (&v0[..n], &mut x[..n], &mut v[..n]);
-        for i in 0..n {
-            let vi = v0[i] + filter[i].apply(f[i] * inv_mass[i]) * h;
-            v[i] = vi;
-            x[i] = x0[i] + vi * h;
-        }
+        let (f, filter) = (&self.f[..], &d.constraints.filter[..]);
+        split_update(x, v, &|r, x, v| {
+            // Equal-length slices let the compiler drop the loop's bounds checks.
+            let n = x.len();
+            let (f, filter, inv_mass) = (&f[r.clone()], &filter[r.clone()], &inv_mass[r.clone()]);
+            let (x0, v0, v) = (&x0[r.clone()], &v0[r], &mut v[..n]);
+            let (f, filter, inv_mass, x0, v0) =
+                (&f[..n], &filter[..n], &inv_mass[..n], &x0[..n], &v0[..n]);
+            for i in 0..n {
+                let vi = v0[i] + filter[i].apply(f[i] * inv_mass[i]) * h;
+                v[i] = vi;
+                x[i] = x0[i] + vi * h;
+            }
+        });
         IntegratorStats {
             force_evaluations: 1,
             ..Default::default()
@@ -125,6 +136,25 @@ impl Integrator for SymplecticEuler {
 
     fn stability_limit(&self) -> Option<f64> {
         Some(2.0)
+    }
+}
+
+/// Runs a per-vertex update `body(range, x[range], v[range])` over all vertices: on two threads
+/// (two halves) from [`PAR_VERTICES`] vertices on, where the pass outweighs waking a thread.
+/// Each vertex's result does not depend on the split.
+pub(super) fn split_update(
+    x: &mut [Vec3],
+    v: &mut [Vec3],
+    body: &(dyn Fn(Range<usize>, &mut [Vec3], &mut [Vec3]) + Sync),
+) {
+    let n = x.len().min(v.len());
+    if n >= PAR_VERTICES {
+        let mid = n / 2;
+        let (xa, xb) = x[..n].split_at_mut(mid);
+        let (va, vb) = v[..n].split_at_mut(mid);
+        rayon::join(|| body(0..mid, xa, va), || body(mid..n, xb, vb));
+    } else {
+        body(0..n, &mut x[..n], &mut v[..n]);
     }
 }
 

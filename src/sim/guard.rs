@@ -135,6 +135,20 @@ pub(crate) struct VertexScan {
     pub mass: f64,
 }
 
+impl VertexScan {
+    /// The scan of two vertex ranges together (in a fixed order: results depend on the split
+    /// only, not on thread timing).
+    pub fn merge(&self, b: &VertexScan) -> VertexScan {
+        VertexScan {
+            finite: self.finite && b.finite,
+            speed2: self.speed2.max(b.speed2),
+            kinetic: self.kinetic + b.kinetic,
+            mass_speed: self.mass_speed + b.mass_speed,
+            mass: self.mass + b.mass,
+        }
+    }
+}
+
 /// Lanes of the vertex scan: independent accumulators the compiler keeps in SIMD registers.
 const LANES: usize = 4;
 

@@ -698,7 +698,24 @@ impl Simulation {
         let g = &self.settings.guard;
         // One pass over the vertices: finiteness, the fastest speed, the kinetic energy, the
         // speed sum of the gravity error bound and the total mass.
-        let scan = guard::scan_vertices(&c.x, &c.v, &self.v_save, &c.mass);
+        // The energy pass at the new state (whose position-only forces serve the next substep)
+        // runs on two threads for large cloths; each also scans its half of the vertices.
+        let v_save = &self.v_save;
+        let ((elastic, gravity_energy), scan, second) =
+            self.effects
+                .energy_split_with(&c.x, |r: std::ops::Range<usize>| {
+                    let (x, v, v0, m) = (
+                        &c.x[r.clone()],
+                        &c.v[r.clone()],
+                        &v_save[r.clone()],
+                        &c.mass[r],
+                    );
+                    guard::scan_vertices(x, v, v0, m)
+                });
+        let scan = match second {
+            Some(b) => scan.merge(&b),
+            None => scan,
+        };
         if !scan.finite {
             let bad = (0..c.len()).find(|&i| !c.x[i].is_finite() || !c.v[i].is_finite());
             if let Some(i) = bad {
@@ -719,7 +736,6 @@ impl Simulation {
         for (i, _) in &c.kinematic {
             kinetic -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
         }
-        let (elastic, gravity_energy) = self.effects.energy_split(&c.x);
         let e1 = Energies {
             kinetic,
             elastic,
