@@ -133,8 +133,9 @@ struct PositionForces {
 
 impl PositionForces {
     /// Whether the cached forces are those at exactly `x`.
+    /// Compares bit patterns (a `memcmp`), the criterion that guarantees identical forces.
     fn hit(&self, x: &[Vec3]) -> bool {
-        self.valid && self.f.len() == x.len() && self.x.as_slice() == x
+        self.valid && self.f.len() == x.len() && bits(&self.x) == bits(x)
     }
 }
 
@@ -400,6 +401,12 @@ pub(crate) fn flat(v: &[Vec3]) -> &[f64] {
     // SAFETY: `Vec3` (glam's DVec3) is `#[repr(C)]` with three f64 fields and no padding (size
     // checked above), so `v` is `3 v.len()` contiguous, initialised, aligned f64 values.
     unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<f64>(), 3 * v.len()) }
+}
+
+/// The bit patterns of positions, for exact comparison.
+fn bits(v: &[Vec3]) -> &[u64] {
+    // SAFETY: as in `flat`; u64 has the size and alignment of f64 and every bit pattern is valid.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), 3 * v.len()) }
 }
 
 /// Mutable [`flat`].
