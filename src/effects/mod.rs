@@ -6,7 +6,6 @@
 
 mod damping;
 mod gravity;
-mod spring_runs;
 mod springs;
 mod stencils;
 mod wind;
