@@ -139,14 +139,13 @@ impl Integrator for SymplecticEuler {
     }
 }
 
+/// A per-vertex update over a range of vertices and their positions and velocities.
+pub(super) type VertexUpdate<'a> = dyn Fn(Range<usize>, &mut [Vec3], &mut [Vec3]) + Sync + 'a;
+
 /// Runs a per-vertex update `body(range, x[range], v[range])` over all vertices: on two threads
 /// (two halves) from [`PAR_VERTICES`] vertices on, where the pass outweighs waking a thread.
 /// Each vertex's result does not depend on the split.
-pub(super) fn split_update(
-    x: &mut [Vec3],
-    v: &mut [Vec3],
-    body: &(dyn Fn(Range<usize>, &mut [Vec3], &mut [Vec3]) + Sync),
-) {
+pub(super) fn split_update(x: &mut [Vec3], v: &mut [Vec3], body: &VertexUpdate) {
     let n = x.len().min(v.len());
     if n >= PAR_VERTICES {
         let mid = n / 2;

@@ -195,7 +195,7 @@ unsafe fn scan_vertices_avx2(x: &[Vec3], v: &[Vec3], v0: &[Vec3], mass: &[f64]) 
             let ld = |k: usize| _mm256_loadu_pd(c[k].as_ptr());
             let m = _mm256_loadu_pd(mass.as_ptr().add(b));
             let (px, py, pz, wx, wy, wz) = (ld(0), ld(1), ld(2), ld(3), ld(4), ld(5));
-            let d = |a: __m256d| _mm256_sub_pd(a, a);
+            let d = |a: __m256d| _mm256_mul_pd(a, zero);
             let nan_test = _mm256_add_pd(
                 _mm256_add_pd(
                     _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(d(px), d(py)), d(pz)), d(wx)),
@@ -254,7 +254,7 @@ impl Accumulators {
     fn add(&mut self, l: usize, p: Vec3, w: Vec3, w0: Vec3, m: f64) {
         // Zero for finite components, NaN as soon as one is infinite or NaN.
         self.finite[l] +=
-            (p.x - p.x) + (p.y - p.y) + (p.z - p.z) + (w.x - w.x) + (w.y - w.y) + (w.z - w.z);
+            (p.x * 0.0) + (p.y * 0.0) + (p.z * 0.0) + (w.x * 0.0) + (w.y * 0.0) + (w.z * 0.0);
         let v2 = w.length_squared();
         self.speed2[l] = self.speed2[l].max(v2);
         self.kinetic[l] += 0.5 * m * v2;
