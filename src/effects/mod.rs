@@ -307,8 +307,8 @@ impl EffectSet {
 
     /// [`EffectSet::energy_split`] that also runs `extra` over the vertex range of each part of
     /// the pass, on the part's thread (the guard's per-vertex checks ride along this way). The
-    /// pass has one part, or two from [`PAR_VERTICES`] vertices on; the second result is `None`
-    /// with one part.
+    /// pass has one part, or two from `PAR_VERTICES` (2048) vertices on; the second result is
+    /// `None` with one part.
     pub fn energy_split_with<T: Send>(
         &self,
         x: &[Vec3],
