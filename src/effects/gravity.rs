@@ -33,8 +33,18 @@ impl Effect for Gravity {
     }
 
     fn add_forces_energy(&self, s: &State, f: &mut [Vec3]) -> f64 {
+        self.add_forces_energy_part(s, f, 0, 1)
+    }
+
+    /// The vertices of the `part`-th slice, so that both threads of a split pass share the work.
+    fn add_forces_energy_part(&self, s: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
+        let r = super::part_range(self.mass.len(), part, parts);
         let mut energy = 0.0;
-        for ((fi, m), xi) in f.iter_mut().zip(&self.mass).zip(s.x) {
+        for ((fi, m), xi) in f[r.clone()]
+            .iter_mut()
+            .zip(&self.mass[r.clone()])
+            .zip(&s.x[r])
+        {
             *fi += self.g * *m;
             energy -= m * self.g.dot(*xi);
         }

@@ -130,10 +130,18 @@ struct PositionForces {
     valid: bool,
 }
 
+impl PositionForces {
+    /// Whether the cached forces are those at exactly `x`.
+    /// Compares bit patterns (a `memcmp`), the criterion that guarantees identical forces.
+    fn hit(&self, x: &[Vec3]) -> bool {
+        self.valid && self.f.len() == x.len() && bits(&self.x) == bits(x)
+    }
+}
+
 /// Vertex count from which the energy-and-force pass is split in two halves run on two threads
 /// (below it, waking a thread costs about as much as the pass). The split depends on the size
 /// only, so results do not depend on the number of threads.
-const PAR_VERTICES: usize = 2048;
+pub(crate) const PAR_VERTICES: usize = 2048;
 
 /// The index range of the `part`-th of `parts` near-equal slices of `len` elements.
 pub(crate) fn part_range(len: usize, part: usize, parts: usize) -> std::ops::Range<usize> {
@@ -203,12 +211,37 @@ impl EffectSet {
     pub fn forces(&self, s: &State, f: &mut [Vec3]) {
         let cached = {
             let cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
-            let hit = cache.valid && cache.f.len() == f.len() && cache.x.as_slice() == s.x;
+            let hit = cache.hit(s.x);
             if hit {
                 f.copy_from_slice(&cache.f);
             }
             hit
         };
+        self.add_uncached(s, f, cached);
+    }
+
+    /// [`EffectSet::forces`] for the last consumer of the forces at these positions (the
+    /// integrator): a cached result is handed over by swapping buffers instead of copied, which
+    /// spends the cache. `f` is resized to the vertex count.
+    pub fn take_forces(&self, s: &State, f: &mut Vec<Vec3>) {
+        let cached = {
+            let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+            let hit = cache.hit(s.x);
+            if hit {
+                std::mem::swap(&mut cache.f, f);
+                cache.valid = false;
+            }
+            hit
+        };
+        if !cached {
+            crate::integrate::scratch(f, s.x.len());
+        }
+        self.add_uncached(s, f, cached);
+    }
+
+    /// Completes `f` with the effects the cache does not hold (all of them, zeroing `f` first,
+    /// when `cached` is false).
+    fn add_uncached(&self, s: &State, f: &mut [Vec3], cached: bool) {
         if !cached {
             f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         }
@@ -269,22 +302,46 @@ impl EffectSet {
     /// (elastic, gravity) potential energies at `x`. The position-only forces at `x` are
     /// computed in the same pass and kept for the next [`EffectSet::forces`] at `x`.
     pub fn energy_split(&self, x: &[Vec3]) -> (f64, f64) {
+        self.energy_split_with(x, |_| ()).0
+    }
+
+    /// [`EffectSet::energy_split`] that also runs `extra` over the vertex range of each part of
+    /// the pass, on the part's thread (the guard's per-vertex checks ride along this way). The
+    /// pass has one part, or two from `PAR_VERTICES` (2048) vertices on; the second result is
+    /// `None` with one part.
+    pub fn energy_split_with<T: Send>(
+        &self,
+        x: &[Vec3],
+        extra: impl Fn(std::ops::Range<usize>) -> T + Sync,
+    ) -> ((f64, f64), T, Option<T>) {
         let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
         let cache = &mut *cache;
-        cache.x.clear();
-        cache.x.extend_from_slice(x);
-        let (el, gr) = if x.len() >= PAR_VERTICES {
+        let n = x.len();
+        let (energies, first, second) = if n >= PAR_VERTICES {
+            crate::integrate::scratch(&mut cache.x, n);
+            let (lo, hi) = (part_range(n, 0, 2), part_range(n, 1, 2));
+            let (xa, xb) = cache.x.split_at_mut(hi.start);
             let (f, half) = (&mut cache.f, &mut cache.half);
+            let extra = &extra;
             let (a, b) = rayon::join(
-                || self.energy_part(x, f, 0, 2),
-                || self.energy_part(x, half, 1, 2),
+                || {
+                    xa.copy_from_slice(&x[lo.clone()]);
+                    (self.energy_part(x, f, 0, 2), extra(lo))
+                },
+                || {
+                    xb.copy_from_slice(&x[hi.clone()]);
+                    (self.energy_part(x, half, 1, 2), extra(hi))
+                },
             );
             for (f, h) in cache.f.iter_mut().zip(&cache.half) {
                 *f += *h;
             }
-            (a.0 + b.0, a.1 + b.1)
+            ((a.0 .0 + b.0 .0, a.0 .1 + b.0 .1), a.1, Some(b.1))
         } else {
-            self.energy_part(x, &mut cache.f, 0, 1)
+            cache.x.clear();
+            cache.x.extend_from_slice(x);
+            let e = self.energy_part(x, &mut cache.f, 0, 1);
+            (e, extra(0..n), None)
         };
         for (e, c) in self.effects.iter().zip(&self.evaluations) {
             if e.position_only() {
@@ -292,7 +349,7 @@ impl EffectSet {
             }
         }
         cache.valid = true;
-        (el, gr)
+        (energies, first, second)
     }
 
     /// (elastic, gravity) energies of one part of the elements, and the position-only forces of
@@ -335,6 +392,26 @@ impl EffectSet {
         b.sort_by(|a, b| b.omega_sq.total_cmp(&a.omega_sq));
         b
     }
+}
+
+/// Positions or forces as one flat `[x0, y0, z0, x1, ...]` slice.
+pub(crate) fn flat(v: &[Vec3]) -> &[f64] {
+    const _: () = assert!(std::mem::size_of::<Vec3>() == 3 * std::mem::size_of::<f64>());
+    // SAFETY: `Vec3` (glam's DVec3) is `#[repr(C)]` with three f64 fields and no padding (size
+    // checked above), so `v` is `3 v.len()` contiguous, initialised, aligned f64 values.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<f64>(), 3 * v.len()) }
+}
+
+/// The bit patterns of positions, for exact comparison.
+fn bits(v: &[Vec3]) -> &[u64] {
+    // SAFETY: as in `flat`; u64 has the size and alignment of f64 and every bit pattern is valid.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), 3 * v.len()) }
+}
+
+/// Mutable [`flat`].
+pub(crate) fn flat_mut(v: &mut [Vec3]) -> &mut [f64] {
+    // SAFETY: as in `flat`; the result borrows `v` mutably and exclusively.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<f64>(), 3 * v.len()) }
 }
 
 /// Outer product `a b^T`.

@@ -13,6 +13,9 @@ pub struct Springs {
     name: &'static str,
     springs: Vec<Spring>,
     k: Vec<f64>,
+    /// One past the largest vertex index: the force pass checks it once against the slices and
+    /// then indexes without per-spring bounds checks.
+    vertex_bound: usize,
     /// Scene parameter per spring group, for diagnostics.
     parameter: String,
     /// Jacobian block slots of every spring (no search per step).
@@ -23,10 +26,16 @@ impl Springs {
     /// `name` is the effect's scene name (`stretch`, `shear`, `skip_one`); `k` is per spring.
     pub fn new(name: &'static str, springs: Vec<Spring>, k: Vec<f64>, parameter: String) -> Self {
         debug_assert_eq!(springs.len(), k.len());
+        let vertex_bound = springs
+            .iter()
+            .map(|s| s.i.max(s.j) as usize + 1)
+            .max()
+            .unwrap_or(0);
         Self {
             name,
             springs,
             k,
+            vertex_bound,
             parameter,
             slots: PairSlots::default(),
         }
@@ -52,6 +61,137 @@ fn tension(x: &[Vec3], s: &Spring, k: f64) -> (Vec3, f64) {
     (d * scale, e)
 }
 
+/// Springs per block of the force pass: their arithmetic runs in SIMD lanes, the gathers and
+/// scatters around it stay in spring order (so the forces are bitwise those of a plain loop).
+const LANES: usize = 4;
+
+/// Adds the forces of `springs` (stiffness `k`) to `f` and returns their energy.
+///
+/// Every index of `springs` is below `bound` (computed at construction); `x` and `f` are checked
+/// against `bound` once here, which is what makes the unchecked indexing below sound.
+fn forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64], bound: usize) -> f64 {
+    assert!(
+        x.len() >= bound && f.len() >= bound && springs.len() == k.len(),
+        "springs reach vertex {} but the state has {} positions and {} forces",
+        bound.saturating_sub(1),
+        x.len(),
+        f.len()
+    );
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above); indices were checked above.
+        return unsafe { forces_energy_avx2(x, f, springs, k) };
+    }
+    // SAFETY: every index is below `bound`, checked above against both slices.
+    unsafe { forces_energy_blocks(x, f, springs, k) }
+}
+
+/// [`forces_energy_blocks`] with the lane arithmetic in AVX registers (4 f64 lanes). Each lane
+/// does the scalar code's operations in the same order, without fused multiply-adds, so the
+/// forces are bitwise those of the scalar loop (only the energy's summation order differs).
+///
+/// Safety: AVX2 is available, and the contract of [`forces_energy_blocks`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn forces_energy_avx2(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
+    use std::arch::x86_64::*;
+    let mut energy = _mm256_setzero_pd();
+    let (zero, half) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5));
+    for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
+        let (mut dx, mut dy, mut dz, mut rest) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        for l in 0..LANES {
+            let s = &sb[l];
+            // SAFETY: indices below x.len() (function contract).
+            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
+            (dx[l], dy[l], dz[l], rest[l]) = (d.x, d.y, d.z, s.rest);
+        }
+        let mut scale = [0.0; 4];
+        // SAFETY: unaligned loads and stores of local 4-element arrays.
+        unsafe {
+            let (vx, vy, vz) = (
+                _mm256_loadu_pd(dx.as_ptr()),
+                _mm256_loadu_pd(dy.as_ptr()),
+                _mm256_loadu_pd(dz.as_ptr()),
+            );
+            let kv = _mm256_loadu_pd(kb.as_ptr());
+            let len2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
+                _mm256_mul_pd(vz, vz),
+            );
+            let len = _mm256_sqrt_pd(len2);
+            let e = _mm256_sub_pd(len, _mm256_loadu_pd(rest.as_ptr()));
+            // -k e / len, zeroed where len = 0 (coincident endpoints: no direction, no force).
+            let q = _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(zero, kv), e), len);
+            let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(len, zero);
+            _mm256_storeu_pd(scale.as_mut_ptr(), _mm256_and_pd(q, positive));
+            let el = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, kv), e), e);
+            energy = _mm256_add_pd(energy, el);
+        }
+        for l in 0..LANES {
+            let s = &sb[l];
+            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
+            // SAFETY: indices below f.len() (function contract).
+            unsafe {
+                *f.get_unchecked_mut(s.i as usize) += fi;
+                *f.get_unchecked_mut(s.j as usize) -= fi;
+            }
+        }
+    }
+    let mut lanes = [0.0; 4];
+    // SAFETY: store to a local 4-element array.
+    unsafe { _mm256_storeu_pd(lanes.as_mut_ptr(), energy) };
+    let tail = springs.len() / LANES * LANES;
+    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail_energy
+}
+
+/// Springs that do not fill a block, one by one (bounds-checked).
+fn tail_forces_energy(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
+    let mut energy = 0.0;
+    for (s, &kl) in springs.iter().zip(k) {
+        let (fi, e) = tension(x, s, kl);
+        f[s.i as usize] += fi;
+        f[s.j as usize] -= fi;
+        energy += 0.5 * kl * e * e;
+    }
+    energy
+}
+
+/// The block loop. Safety: every spring index is below `x.len()` and `f.len()`.
+#[inline(always)]
+unsafe fn forces_energy_blocks(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: &[f64]) -> f64 {
+    let mut energy = [0.0; LANES];
+    for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
+        let (mut dx, mut dy, mut dz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            let s = &sb[l];
+            // SAFETY: indices below x.len() (function contract).
+            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
+            (dx[l], dy[l], dz[l]) = (d.x, d.y, d.z);
+        }
+        let mut scale = [0.0; LANES];
+        for l in 0..LANES {
+            let (kl, rest) = (kb[l], sb[l].rest);
+            let len = (dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l]).sqrt();
+            let e = len - rest;
+            scale[l] = if len > 0.0 { -kl * e / len } else { 0.0 };
+            energy[l] += 0.5 * kl * e * e;
+        }
+        for l in 0..LANES {
+            let s = &sb[l];
+            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
+            // SAFETY: indices below f.len() (function contract).
+            unsafe {
+                *f.get_unchecked_mut(s.i as usize) += fi;
+                *f.get_unchecked_mut(s.j as usize) -= fi;
+            }
+        }
+    }
+    let tail = springs.len() / LANES * LANES;
+    let tail_energy = tail_forces_energy(x, f, &springs[tail..], &k[tail..]);
+    (energy[0] + energy[1]) + (energy[2] + energy[3]) + tail_energy
+}
+
 impl Effect for Springs {
     fn name(&self) -> &'static str {
         self.name
@@ -68,11 +208,8 @@ impl Effect for Springs {
     }
 
     fn add_forces(&self, st: &State, f: &mut [Vec3]) {
-        for (s, &k) in self.springs.iter().zip(&self.k) {
-            let (fi, _) = tension(st.x, s, k);
-            f[s.i as usize] += fi;
-            f[s.j as usize] -= fi;
-        }
+        // The fused pass: the energy costs a few multiplies next to the square root and division.
+        forces_energy(st.x, f, &self.springs, &self.k, self.vertex_bound);
     }
 
     fn add_forces_energy(&self, st: &State, f: &mut [Vec3]) -> f64 {
@@ -81,14 +218,13 @@ impl Effect for Springs {
 
     fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
         let r = super::part_range(self.springs.len(), part, parts);
-        let mut energy = 0.0;
-        for (s, &k) in self.springs[r.clone()].iter().zip(&self.k[r]) {
-            let (fi, e) = tension(st.x, s, k);
-            f[s.i as usize] += fi;
-            f[s.j as usize] -= fi;
-            energy += 0.5 * k * e * e;
-        }
-        energy
+        forces_energy(
+            st.x,
+            f,
+            &self.springs[r.clone()],
+            &self.k[r],
+            self.vertex_bound,
+        )
     }
 
     fn add_jacobians(&self, st: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
@@ -143,5 +279,86 @@ impl Effect for Springs {
             vertex,
             parameter: self.parameter.clone(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Springs of a 7x5 lattice (rows, columns, diagonals, skip-one) and a few irregular ones, at
+    /// a deformed state with one pair of coincident endpoints: the block pass gives bitwise the
+    /// forces of a plain loop and its energy to rounding, whole and in two parts.
+    #[test]
+    fn block_pass_matches_a_plain_loop() {
+        let (nu, nv) = (7usize, 5usize);
+        let id = |i: usize, j: usize| (j * nu + i) as u32;
+        let mut springs = Vec::new();
+        for j in 0..nv {
+            for i in 0..nu {
+                for (di, dj) in [(1isize, 0isize), (0, 1), (1, 1), (-1, 1), (2, 0)] {
+                    let (a, b) = (i as isize + di, j as isize + dj);
+                    if (0..nu as isize).contains(&a) && (0..nv as isize).contains(&b) {
+                        let rest = 0.1 * ((di * di + dj * dj) as f64).sqrt();
+                        springs.push(Spring {
+                            i: id(i, j),
+                            j: id(a as usize, b as usize),
+                            rest,
+                        });
+                    }
+                }
+            }
+        }
+        springs.push(Spring {
+            i: 30,
+            j: 3,
+            rest: 0.4,
+        });
+        let k: Vec<f64> = (0..springs.len()).map(|s| 100.0 + s as f64).collect();
+        let mut x: Vec<Vec3> = (0..nu * nv)
+            .map(|v| {
+                let (i, j) = ((v % nu) as f64, (v / nu) as f64);
+                Vec3::new(0.1 * i + 0.01 * j.sin(), 0.1 * j, 0.02 * (i * j).cos())
+            })
+            .collect();
+        x[9] = x[8];
+        let mut reference = vec![Vec3::ZERO; x.len()];
+        let mut e_ref = 0.0;
+        for (s, &kl) in springs.iter().zip(&k) {
+            let d = x[s.i as usize] - x[s.j as usize];
+            let len = d.length();
+            let e = len - s.rest;
+            let fi = if len > 0.0 {
+                d * (-kl * e / len)
+            } else {
+                Vec3::ZERO
+            };
+            reference[s.i as usize] += fi;
+            reference[s.j as usize] -= fi;
+            e_ref += 0.5 * kl * e * e;
+        }
+        assert!(reference[8].is_finite() && reference[9].is_finite());
+        let effect = Springs::new("stretch", springs, k, "k".into());
+        let st = State {
+            t: 0.0,
+            x: &x,
+            v: &[],
+        };
+        let mut f = vec![Vec3::ZERO; x.len()];
+        let energy = effect.add_forces_energy(&st, &mut f);
+        assert_eq!(f, reference);
+        // Four interleaved partial sums instead of one: a few ulps.
+        assert!(
+            (energy - e_ref).abs() <= 1e-14 * e_ref,
+            "{energy} vs {e_ref}"
+        );
+        // Two parts into separate buffers sum to the whole (to rounding).
+        let (mut a, mut b) = (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
+        let e2 = effect.add_forces_energy_part(&st, &mut a, 0, 2)
+            + effect.add_forces_energy_part(&st, &mut b, 1, 2);
+        for ((p, q), r) in a.iter().zip(&b).zip(&reference) {
+            assert!((*p + *q - *r).length() <= 1e-13 * (1.0 + r.length()), "{r}");
+        }
+        assert!((e2 - e_ref).abs() <= 1e-14 * e_ref);
     }
 }

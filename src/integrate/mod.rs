@@ -132,6 +132,23 @@ pub trait Integrator: Send {
         v: &mut [Vec3],
     ) -> IntegratorStats;
 
+    /// [`Integrator::step`] out of place: advances `(x0, v0)` and writes the result to `(x, v)`
+    /// (same lengths; every entry is overwritten). The simulation keeps the start state for the
+    /// divergence guard's rollback this way without copying it. Default: copy, then step in place.
+    fn step_into(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        (x0, v0): (&[Vec3], &[Vec3]),
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
+        x.copy_from_slice(x0);
+        v.copy_from_slice(v0);
+        self.step(d, t, h, x, v)
+    }
+
     /// Largest stable `h * omega` for an undamped oscillator, if the method has one.
     fn stability_limit(&self) -> Option<f64> {
         None

@@ -10,7 +10,10 @@
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
-//! guarded explicit substep costs one pass over the effects.
+//! guarded explicit substep costs one pass over the effects. The same pass scans the vertices for
+//! the guard (finiteness, speed, kinetic energy), on two threads for large cloths. The rollback
+//! state costs no copy: the start state's buffers are swapped out and the integrator writes the
+//! end state out of place ([`Integrator::step_into`]).
 
 mod guard;
 
@@ -149,6 +152,9 @@ pub struct Simulation {
     time: f64,
     /// Energy of the current state, if known (saves one evaluation per substep).
     energy_cache: Option<Energies>,
+    /// Largest squared vertex speed of the current state when the guard's scan measured it
+    /// (cleared by anything that changes velocities after the scan, e.g. collisions).
+    scanned_speed2: Option<f64>,
     /// Dynamic energy of the last substeps: the guard's reference level, so that the bounded
     /// energy oscillation of a stable symplectic step is not mistaken for a blow-up.
     recent_energy: [f64; 16],
@@ -192,6 +198,7 @@ impl Simulation {
             constraints: Constraints::free(n),
             time: 0.0,
             energy_cache: None,
+            scanned_speed2: None,
             recent_energy: [0.0; 16],
             energy_budget: None,
             budget_scale: 0.0,
@@ -391,6 +398,7 @@ impl Simulation {
         let n_sub = self.settings.substeps.max(1);
         let h = self.settings.dt / n_sub as f64;
         let t0 = self.time;
+        self.scanned_speed2 = None;
         for f in 0..self.frames.len() {
             if let Some(script) = &self.frames.script[f] {
                 self.frames.end[f] = script(t0 + self.settings.dt);
@@ -415,13 +423,13 @@ impl Simulation {
         m.time = self.time;
         m.kinetic_energy = ke;
         m.potential_energy = pe;
-        m.max_speed = self
-            .cloth
-            .v
-            .iter()
-            .map(|v| v.length_squared())
-            .fold(0.0, f64::max)
-            .sqrt();
+        let speed2 = match self.scanned_speed2 {
+            Some(s2) => s2,
+            None => (self.cloth.v.iter())
+                .map(|v| v.length_squared())
+                .fold(0.0, f64::max),
+        };
+        m.max_speed = speed2.sqrt();
         m.wall_time_s = wall.elapsed().as_secs_f64();
         self.last = m;
         Ok(&self.last)
@@ -476,8 +484,12 @@ impl Simulation {
         };
         let (e0_total, e0_dynamic) = (e0.total(), e0.dynamic());
         let external = self.external_work_rate(t);
-        self.x_save.clone_from(&self.cloth.x);
-        self.v_save.clone_from(&self.cloth.v);
+        // The start state moves to the save buffers (a swap, not a copy) and the integrator
+        // writes the end state into the cloth's buffers.
+        std::mem::swap(&mut self.x_save, &mut self.cloth.x);
+        std::mem::swap(&mut self.v_save, &mut self.cloth.v);
+        crate::integrate::scratch(&mut self.cloth.x, n);
+        crate::integrate::scratch(&mut self.cloth.v, n);
 
         // 2. Integrate.
         let stats: IntegratorStats = {
@@ -486,8 +498,9 @@ impl Simulation {
                 mass: &self.cloth.mass,
                 constraints: &self.constraints,
             };
+            let start = (self.x_save.as_slice(), self.v_save.as_slice());
             self.integrator
-                .step(&d, t, h, &mut self.cloth.x, &mut self.cloth.v)
+                .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
         };
         m.force_evaluations += stats.force_evaluations;
         m.cg_iterations += stats.cg_iterations;
@@ -507,7 +520,8 @@ impl Simulation {
             verdict = self.check_with_end_forces(t + h, h, e0);
         }
         match verdict {
-            Ok((e1, spent)) => {
+            Ok((e1, spent, speed2)) => {
+                self.scanned_speed2 = Some(speed2);
                 if self.energy_budget.is_none() {
                     self.budget_scale = e0_dynamic;
                 }
@@ -518,8 +532,8 @@ impl Simulation {
                 self.substep_count += 1;
             }
             Err((vertex, symptom)) => {
-                self.cloth.x.clone_from(&self.x_save);
-                self.cloth.v.clone_from(&self.v_save);
+                std::mem::swap(&mut self.cloth.x, &mut self.x_save);
+                std::mem::swap(&mut self.cloth.v, &mut self.v_save);
                 self.energy_cache = Some(e0);
                 let g = self.settings.guard;
                 if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
@@ -568,6 +582,7 @@ impl Simulation {
                 *budget += (after.total() - b.total()).max(0.0);
             }
             self.energy_cache = Some(after);
+            self.scanned_speed2 = None;
         }
         m.substeps += 1;
         Ok(())
@@ -680,7 +695,7 @@ impl Simulation {
         t1: f64,
         h: f64,
         e0: Energies,
-    ) -> Result<(Energies, f64), (usize, Symptom)> {
+    ) -> Result<(Energies, f64, f64), (usize, Symptom)> {
         let n = self.cloth.len();
         crate::integrate::scratch(&mut self.scratch_f, n);
         let s = State {
@@ -722,32 +737,49 @@ impl Simulation {
         h: f64,
         e0: Energies,
         fext: Option<&[Vec3]>,
-    ) -> Result<(Energies, f64), (usize, Symptom)> {
+    ) -> Result<(Energies, f64, f64), (usize, Symptom)> {
         let c = &self.cloth;
         let g = &self.settings.guard;
-        // One pass over the vertices: finiteness, the fastest vertex, the kinetic energy and the
-        // speed sum of the gravity error bound.
-        let (mut fastest, mut speed2, mut kinetic, mut mass_speed) = (0, 0.0, 0.0, 0.0);
-        for i in 0..c.len() {
-            let (v, m) = (c.v[i], c.mass[i]);
-            if !c.x[i].is_finite() || !v.is_finite() {
+        // One pass over the vertices: finiteness, the fastest speed, the kinetic energy, the
+        // speed sum of the gravity error bound and the total mass.
+        // The energy pass at the new state (whose position-only forces serve the next substep)
+        // runs on two threads for large cloths; each also scans its half of the vertices.
+        let v_save = &self.v_save;
+        let ((elastic, gravity_energy), scan, second) =
+            self.effects
+                .energy_split_with(&c.x, |r: std::ops::Range<usize>| {
+                    let (x, v, v0, m) = (
+                        &c.x[r.clone()],
+                        &c.v[r.clone()],
+                        &v_save[r.clone()],
+                        &c.mass[r],
+                    );
+                    guard::scan_vertices(x, v, v0, m)
+                });
+        let scan = match second {
+            Some(b) => scan.merge(&b),
+            None => scan,
+        };
+        if !scan.finite {
+            let bad = (0..c.len()).find(|&i| !c.x[i].is_finite() || !c.v[i].is_finite());
+            if let Some(i) = bad {
                 return Err((i, Symptom::NonFinite));
             }
-            let v2 = v.length_squared();
-            if v2 > speed2 {
-                (fastest, speed2) = (i, v2);
-            }
-            kinetic += 0.5 * m * v2;
-            mass_speed += m * v2.max(self.v_save[i].length_squared()).sqrt();
         }
-        let speed = speed2.sqrt();
+        // The first vertex at the top speed: only looked up when a check fails.
+        let fastest = || {
+            (0..c.len())
+                .find(|&i| c.v[i].length_squared() == scan.speed2)
+                .unwrap_or(0)
+        };
+        let (mut kinetic, mass_speed) = (scan.kinetic, scan.mass_speed);
+        let speed = scan.speed2.sqrt();
         if speed > g.max_speed {
-            return Err((fastest, Symptom::Speed(speed)));
+            return Err((fastest(), Symptom::Speed(speed)));
         }
         for (i, _) in &c.kinematic {
             kinetic -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
         }
-        let (elastic, gravity_energy) = self.effects.energy_split(&c.x);
         let e1 = Energies {
             kinetic,
             elastic,
@@ -755,7 +787,7 @@ impl Simulation {
         };
         let (e0_total, e0_dynamic, e1_total) = (e0.total(), e0.dynamic(), e1.total());
         if !e1_total.is_finite() {
-            return Err((fastest, Symptom::NonFinite));
+            return Err((fastest(), Symptom::NonFinite));
         }
         let work: f64 = match fext {
             Some(f) => (0..c.len())
@@ -765,13 +797,12 @@ impl Simulation {
         };
         let gravity = self.effects.gravity().length();
         let gravity_error = h * gravity * mass_speed;
-        let total_mass: f64 = c.mass.iter().sum();
-        let floor = 1e-12 * (1.0 + total_mass);
+        let floor = 1e-12 * (1.0 + scan.mass);
         let reference = self.recent_energy.iter().fold(e0_dynamic, |a, &b| a.max(b));
         let allowed = work + g.energy_growth * reference + gravity_error + floor;
         let gained = e1_total - e0_total;
         if gained > allowed {
-            return Err((fastest, Symptom::EnergyGain { gained, allowed }));
+            return Err((fastest(), Symptom::EnergyGain { gained, allowed }));
         }
         let spent = work + gravity_error + floor;
         let budget = self.energy_budget.unwrap_or(e0_total) + spent;
@@ -783,14 +814,14 @@ impl Simulation {
         let over = e1_total - budget;
         if over > g.energy_growth * scale + floor {
             return Err((
-                fastest,
+                fastest(),
                 Symptom::EnergyGain {
                     gained: over,
                     allowed: g.energy_growth * scale,
                 },
             ));
         }
-        Ok((e1, spent))
+        Ok((e1, spent, scan.speed2))
     }
 
     fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
