@@ -80,7 +80,7 @@ fn pinch_at_full_resolution_until_after_the_press_stops() {
 /// vertices counted the springs' explicit load `f h / m` (90-600 m/s) as the normal impulse, so
 /// every held vertex stuck and its projection back against its neighbours stretched the springs
 /// each step: 0.81 of the energy scale above the initial energy, 40 J put in and damped out
-/// over 1.5 s. The bound: 0.1 of the scale (measured 0.05 with the fix; the rest is the ground's
+/// over 1.5 s. The bound: 0.1 of the scale (measured 0.078 with the fix; the rest is the ground's
 /// projection of the first vertices to land, see `crumple` in src/hard/cases.rs).
 #[test]
 fn crumple_contact_response_does_not_pump_energy() {

@@ -289,7 +289,8 @@ impl CollisionStage {
     }
 
     /// Records that the solver held `vertex` against a surface of normal `normal` this step,
-    /// removing the normal velocity `dvn` (m/s, >= 0) that the other forces would have given it.
+    /// removing the normal velocity `dvn` (m/s, >= 0) that gravity would have given it (the
+    /// caller's estimate of the filter's normal impulse per unit mass).
     /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
     /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
     /// velocity change it sees; without it a held vertex slides frictionless.

@@ -469,7 +469,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        self.contact_constraints(t, h);
+        let held = self.contact_constraints(t);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -538,6 +538,26 @@ impl Simulation {
             for (i, _) in &self.cloth.kinematic {
                 self.inv_mass[*i as usize] = 0.0;
             }
+            // Normal impulse per unit mass the filter gave each held vertex, for friction:
+            // implicit Euler is `m (v1 - v0) = h f(x1, v1) + impulse`. (Start-of-step forces,
+            // `f0 h / m`, overstate it up to 1e3 times for a vertex pressed by springs that the
+            // implicit step relaxes: every held vertex then stuck, and friction's projection
+            // back stretched the springs every step.)
+            if !held.is_empty() {
+                crate::integrate::scratch(&mut self.scratch_f, n);
+                let s = State {
+                    t: t + h,
+                    x: &self.cloth.x,
+                    v: &self.cloth.v,
+                };
+                self.effects.forces(&s, &mut self.scratch_f);
+                for &(i, normal) in &held {
+                    let dv = self.cloth.v[i]
+                        - self.v_save[i]
+                        - self.scratch_f[i] * (h / self.cloth.mass[i]);
+                    stage.set_held(i, normal, dv.dot(normal));
+                }
+            }
             let before = self.energy_cache;
             let r = stage.resolve(
                 &self.x_save,
@@ -593,12 +613,14 @@ impl Simulation {
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
     /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
     /// vertex is pulled away from the surface by the other forces is released instead of held.
-    fn contact_constraints(&mut self, t: f64, h: f64) {
-        let Some(stage) = self.collision.as_mut() else {
-            return;
+    /// Returns the held vertices with their normals.
+    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, Vec3)> {
+        let mut held = Vec::new();
+        let Some(stage) = self.collision.as_ref() else {
+            return held;
         };
         if !stage.settings().response.uses_filter() || stage.contacts().is_empty() {
-            return;
+            return held;
         }
         let n = self.cloth.len();
         crate::integrate::scratch(&mut self.scratch_f, n);
@@ -608,23 +630,18 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
-        let mut held = Vec::new();
         for c in stage.contacts() {
             let i = c.vertex as usize;
             if i >= n || self.constraints.filter[i] == Filter::Fixed {
                 continue;
             }
-            let load = self.scratch_f[i].dot(c.normal);
-            if load <= 0.0 {
+            if self.scratch_f[i].dot(c.normal) <= 0.0 {
                 self.constraints.filter[i] = Filter::Direction(c.normal);
                 self.constraints.target_velocity[i] = c.surface_velocity;
-                // The normal velocity the filter takes away this step, for friction.
-                held.push((i, c.normal, -load * h / self.cloth.mass[i]));
+                held.push((i, c.normal));
             }
         }
-        for &(i, normal, dvn) in &held {
-            stage.set_held(i, normal, dvn);
-        }
+        held
     }
 
     /// Work done on the cloth during the substep by forces from outside it (wind and moving
