@@ -132,6 +132,9 @@ pub enum StageError {
     },
 }
 
+/// Up to three (normal, normal velocity change) a vertex was held with (zero: unused).
+pub(crate) type Held = [(Vec3, f64); 3];
+
 pub struct CollisionStage {
     settings: CollisionSettings,
     obstacles: Vec<Obstacle>,
@@ -158,9 +161,10 @@ pub struct CollisionStage {
     culling: bool,
     /// Per obstacle: near enough to the cloth to be tested this step.
     near: Vec<bool>,
-    /// Per vertex, the normal and normal velocity change (m/s) the implicit solver's contact
-    /// filter applied this step (see `set_held`); used once by the next `resolve`.
-    held: Vec<(Vec3, f64)>,
+    /// Per vertex, the normals and normal velocity changes (m/s) the implicit solver's contact
+    /// filter applied this step, one per held surface (see `set_held`); used once by the next
+    /// `resolve`.
+    held: Vec<Held>,
 }
 
 impl CollisionStage {
@@ -293,16 +297,19 @@ impl CollisionStage {
     /// caller's estimate of the filter's normal impulse per unit mass).
     /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
     /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
-    /// velocity change it sees; without it a held vertex slides frictionless.
+    /// velocity change it sees; without it a held vertex slides frictionless. A vertex held by
+    /// several surfaces (a wedge) gets one call per surface; a fourth one is ignored.
     pub fn set_held(&mut self, vertex: usize, normal: Vec3, dvn: f64) {
         if vertex >= self.n_vertices || !(dvn.is_finite() && dvn > 0.0) || !normal.is_finite() {
             return;
         }
         if self.held.len() != self.n_vertices {
             self.held.clear();
-            self.held.resize(self.n_vertices, (Vec3::ZERO, 0.0));
+            self.held.resize(self.n_vertices, [(Vec3::ZERO, 0.0); 3]);
         }
-        self.held[vertex] = (normal, dvn);
+        if let Some(slot) = self.held[vertex].iter_mut().find(|s| s.1 == 0.0) {
+            *slot = (normal, dvn);
+        }
     }
 
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
@@ -390,6 +397,60 @@ impl CollisionStage {
         pinched
     }
 
+    /// A vertex in contact with two or more obstacles whose surfaces do not face each other (a
+    /// wedge: cloth pressed by a robot's hand against its torso) is pushed out of one layer after
+    /// the other, in obstacle order: leaving the last one along its normal can carry it back into
+    /// an earlier one, whose solid it then ends inside. Alternating projections onto the layers
+    /// converge to their intersection (each round shrinks the remaining depth by the cosine of
+    /// the wedge's normals); approaching normal velocity is removed for each surface on the way.
+    fn separate_wedged(&self, x0: &[Vec3], x1: &mut [Vec3], v1: &mut [Vec3], n: usize) {
+        const ROUNDS: usize = 8;
+        let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
+            .contacts
+            .iter()
+            .map(|c| (c.vertex, c.obstacle, c.normal, c.surface_velocity))
+            .collect();
+        by_vertex.sort_by_key(|c| c.0);
+        for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0 as usize;
+            if group.len() < 2 || i >= n {
+                continue;
+            }
+            // Facing surfaces are a pinch (`center_pinched`), not a wedge.
+            let opposed = group
+                .iter()
+                .enumerate()
+                .any(|(a, ca)| group[a + 1..].iter().any(|cb| ca.2.dot(cb.2) < -0.5));
+            if opposed {
+                continue;
+            }
+            let th = self.thickness[i];
+            for _ in 0..ROUNDS {
+                let mut moved = false;
+                for &(_, oi, _, surface_velocity) in group {
+                    let o = &self.obstacles[oi];
+                    let local = o.pose.inverse_transform_point(x1[i]);
+                    let hint = o.pose_prev.inverse_transform_point(x0[i]);
+                    let sp = o.closest_local(local, hint);
+                    // Rounding-level depths are left alone (the rounds would never end).
+                    if !(sp.signed_distance < th * (1.0 - 1e-6)) {
+                        continue;
+                    }
+                    let normal = o.pose.transform_vector(sp.normal);
+                    x1[i] += normal * (th - sp.signed_distance);
+                    let vn = (v1[i] - surface_velocity).dot(normal);
+                    if vn < 0.0 {
+                        v1[i] -= normal * vn;
+                    }
+                    moved = true;
+                }
+                if !moved {
+                    break;
+                }
+            }
+        }
+    }
+
     /// Cloth vertices against every obstacle (all vertices, or those flagged in `only`).
     #[allow(clippy::too_many_arguments)]
     fn vertex_pass(
@@ -475,7 +536,7 @@ impl CollisionStage {
                             h,
                             mode,
                             response,
-                            held: held.get(i).copied().unwrap_or((Vec3::ZERO, 0.0)),
+                            held: held.get(i).copied().unwrap_or([(Vec3::ZERO, 0.0); 3]),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -517,6 +578,7 @@ impl CollisionStage {
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
         let pinched = self.center_pinched(x0, x1, v1, n);
+        self.separate_wedged(x0, x1, v1, n);
 
         let mut report = CollisionReport {
             culled,
@@ -564,6 +626,7 @@ impl CollisionStage {
                 *flag |= m;
             }
             self.center_pinched(x0, x1, v1, n);
+            self.separate_wedged(x0, x1, v1, n);
         }
         self.feature_moved = moved;
         self.held.clear();

@@ -17,7 +17,7 @@ mod guard;
 pub use guard::{DivergenceError, DivergencePolicy, GuardSettings, Symptom};
 
 use crate::cloth::{Cloth, Kinematic};
-use crate::collide::CollisionStage;
+use crate::collide::{CollisionStage, HeldNormals};
 use crate::effects::{EffectSet, State};
 use crate::integrate::{Constraints, Dynamics, Filter, Integrator, IntegratorStats};
 use crate::{Pose, Vec3};
@@ -551,11 +551,14 @@ impl Simulation {
                     v: &self.cloth.v,
                 };
                 self.effects.forces(&s, &mut self.scratch_f);
-                for &(i, normal) in &held {
+                for (i, normals) in &held {
+                    let i = *i;
                     let dv = self.cloth.v[i]
                         - self.v_save[i]
                         - self.scratch_f[i] * (h / self.cloth.mass[i]);
-                    stage.set_held(i, normal, dv.dot(normal));
+                    for (normal, dvn) in normals.normals().iter().zip(normals.split(dv)) {
+                        stage.set_held(i, *normal, dvn);
+                    }
                 }
             }
             let before = self.energy_cache;
@@ -613,8 +616,9 @@ impl Simulation {
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
     /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
     /// vertex is pulled away from the surface by the other forces is released instead of held.
-    /// Returns the held vertices with their normals.
-    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, Vec3)> {
+    /// A vertex held by two or three surfaces keeps its velocity along all their normals (see
+    /// [`HeldNormals`]). Returns the held vertices with their normals.
+    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals)> {
         let mut held = Vec::new();
         let Some(stage) = self.collision.as_ref() else {
             return held;
@@ -630,16 +634,25 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
-        for c in stage.contacts() {
-            let i = c.vertex as usize;
-            if i >= n || self.constraints.filter[i] == Filter::Fixed {
-                continue;
-            }
-            if self.scratch_f[i].dot(c.normal) <= 0.0 {
-                self.constraints.filter[i] = Filter::Direction(c.normal);
-                self.constraints.target_velocity[i] = c.surface_velocity;
-                held.push((i, c.normal));
-            }
+        // The pressing contacts, grouped by vertex (in contact order within a vertex).
+        let mut pressing: Vec<(usize, Vec3, Vec3)> = stage
+            .contacts()
+            .iter()
+            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity))
+            .filter(|&(i, normal, _)| {
+                i < n
+                    && self.constraints.filter[i] != Filter::Fixed
+                    && self.scratch_f[i].dot(normal) <= 0.0
+            })
+            .collect();
+        pressing.sort_by_key(|c| c.0);
+        for group in pressing.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0;
+            let normals = HeldNormals::from_contacts(group.iter().map(|c| (c.1, c.2)));
+            let (filter, target) = normals.filter();
+            self.constraints.filter[i] = filter;
+            self.constraints.target_velocity[i] = target;
+            held.push((i, normals));
         }
         held
     }
