@@ -16,6 +16,10 @@ use crate::{Mat3, Vec3};
 /// small linear system ill-conditioned (1/sin^2); at 0.25 (14.5 degrees) it is at most 16.
 const MIN_SINE: f64 = 0.25;
 
+/// Contact normals facing each other closer than this cosine (120 degrees) pinch the vertex
+/// (the collision stage's `center_pinched` uses the same test).
+const PINCH_COSINE: f64 = -0.5;
+
 /// The contact normals a vertex is held against this substep (linearly independent, at most 3).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct HeldNormals {
@@ -27,8 +31,11 @@ pub struct HeldNormals {
 
 impl HeldNormals {
     /// Collects the contacts `(unit normal, surface velocity)` of one vertex in order (others are
-    /// skipped). A contact
-    /// whose normal is (nearly) dependent on the ones kept replaces the only one kept (the latest
+    /// skipped). A contact facing a kept one (more than 120 degrees apart: a pinch, which the
+    /// collision stage centres between the two surfaces with their mean normal velocity) gives
+    /// the kept normal that mean velocity instead of a constraint of its own: holding each
+    /// surface's velocity would crush the vertex between them as the gap closes. A contact whose
+    /// normal is (nearly) dependent on the ones kept replaces the only one kept (the latest
     /// contact wins, as for a single surface) or is dropped when two or more are kept.
     pub fn from_contacts(contacts: impl IntoIterator<Item = (Vec3, Vec3)>) -> Self {
         let mut h = Self::default();
@@ -37,6 +44,11 @@ impl HeldNormals {
             // and the cloth's contact chatter amplifies even that (tests/contact_rest.rs's shirt:
             // 48 -> 74 fast vertices).
             if !(n.is_finite() && s.is_finite()) || (n.length_squared() - 1.0).abs() > 1e-6 {
+                continue;
+            }
+            if let Some(k) = (0..h.len).find(|&k| h.normals[k].dot(n) < PINCH_COSINE) {
+                let nk = h.normals[k];
+                h.surface[k] += nk * (0.5 * (s - h.surface[k]).dot(nk));
                 continue;
             }
             if h.len == 3 {
@@ -180,9 +192,14 @@ mod tests {
     fn a_single_surface_and_a_pinch_keep_the_plane_filter() {
         let h = HeldNormals::from_contacts([(Vec3::Z, Vec3::X)]);
         assert_eq!(h.filter(), (Filter::Direction(Vec3::Z), Vec3::X));
-        // Facing surfaces (a pinch): dependent normals, the latest wins as before.
-        let h = HeldNormals::from_contacts([(Vec3::Z, Vec3::ZERO), (-Vec3::Z, Vec3::Y)]);
-        assert_eq!(h.filter(), (Filter::Direction(-Vec3::Z), Vec3::Y));
+        // Facing surfaces (a pinch), 132 degrees apart: the first normal, with the two surface
+        // velocities' mean along it (as `center_pinched` sets).
+        let a = 132f64.to_radians();
+        let n2 = Vec3::new(a.sin(), 0.0, a.cos());
+        let h = HeldNormals::from_contacts([(Vec3::Z, Vec3::ZERO), (n2, Vec3::Z * -0.4)]);
+        let (f, target) = h.filter();
+        assert_eq!(f, Filter::Direction(Vec3::Z));
+        assert!((target.z - 0.5 * (0.0 - 0.4)).abs() < 1e-12, "{target}");
         // Nearly coplanar (10 degrees): no independent constraint.
         let (n1, n2) = wedge(10.0);
         assert_eq!(

@@ -397,13 +397,20 @@ impl CollisionStage {
         pinched
     }
 
-    /// A vertex in contact with two or more obstacles whose surfaces do not face each other (a
-    /// wedge: cloth pressed by a robot's hand against its torso) is pushed out of one layer after
+    /// A vertex in contact with two or more obstacles and not pinched between them (a wedge:
+    /// cloth pressed by a robot's hand against its torso) is pushed out of one layer after
     /// the other, in obstacle order: leaving the last one along its normal can carry it back into
     /// an earlier one, whose solid it then ends inside. Alternating projections onto the layers
     /// converge to their intersection (each round shrinks the remaining depth by the cosine of
     /// the wedge's normals); approaching normal velocity is removed for each surface on the way.
-    fn separate_wedged(&self, x0: &[Vec3], x1: &mut [Vec3], v1: &mut [Vec3], n: usize) {
+    fn separate_wedged(
+        &self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        n: usize,
+        pinched: &[(usize, Vec3, Vec3)],
+    ) {
         const ROUNDS: usize = 8;
         let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
             .contacts
@@ -413,15 +420,9 @@ impl CollisionStage {
         by_vertex.sort_by_key(|c| c.0);
         for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
             let i = group[0].0 as usize;
-            if group.len() < 2 || i >= n {
-                continue;
-            }
-            // Facing surfaces are a pinch (`center_pinched`), not a wedge.
-            let opposed = group
-                .iter()
-                .enumerate()
-                .any(|(a, ca)| group[a + 1..].iter().any(|cb| ca.2.dot(cb.2) < -0.5));
-            if opposed {
+            // A pinched vertex (facing surfaces closer than two thicknesses) cannot leave both
+            // layers: `center_pinched` put it midway.
+            if group.len() < 2 || i >= n || pinched.iter().any(|p| p.0 == i) {
                 continue;
             }
             let th = self.thickness[i];
@@ -578,7 +579,7 @@ impl CollisionStage {
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
         let pinched = self.center_pinched(x0, x1, v1, n);
-        self.separate_wedged(x0, x1, v1, n);
+        self.separate_wedged(x0, x1, v1, n, &pinched);
 
         let mut report = CollisionReport {
             culled,
@@ -625,8 +626,8 @@ impl CollisionStage {
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
-            self.center_pinched(x0, x1, v1, n);
-            self.separate_wedged(x0, x1, v1, n);
+            let pinched = self.center_pinched(x0, x1, v1, n);
+            self.separate_wedged(x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;
         self.held.clear();
