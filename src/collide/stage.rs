@@ -434,7 +434,8 @@ impl CollisionStage {
                     let hint = o.pose_prev.inverse_transform_point(x0[i]);
                     let sp = o.closest_local(local, hint);
                     // Rounding-level depths are left alone (the rounds would never end).
-                    if !(sp.signed_distance < th * (1.0 - 1e-6)) {
+                    let inside = sp.signed_distance < th * (1.0 - 1e-6);
+                    if !inside {
                         continue;
                     }
                     let normal = o.pose.transform_vector(sp.normal);
