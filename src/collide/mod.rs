@@ -4,6 +4,7 @@
 
 mod broad;
 mod features;
+pub mod held;
 pub mod motion;
 pub mod narrow;
 pub mod obstacle;
@@ -12,6 +13,7 @@ mod self_contact;
 pub mod spec;
 pub mod stage;
 
+pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};
 pub use spec::{

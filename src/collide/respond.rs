@@ -30,8 +30,9 @@ pub(crate) struct VertexInput {
     pub mode: DetectionMode,
     pub response: ResponseMode,
     /// (world normal, normal velocity change) the implicit filter applied to this vertex this
-    /// step (zero when not held): it counts in the friction bound along a matching normal.
-    pub held: (Vec3, f64),
+    /// step, one per held surface (zero when not held): the one along this contact's normal
+    /// counts in its friction bound.
+    pub held: super::stage::Held,
 }
 
 /// Detects and answers one vertex against one obstacle, updating `x` (end position) and `v`.
@@ -86,7 +87,11 @@ pub(crate) fn obstacle_vertex(
     let dvn = (-vn).max(0.0);
     let vt = rel - n * vn;
     let vt_len = vt.length();
-    let held = inp.held.1 * inp.held.0.dot(n).max(0.0);
+    let held = inp
+        .held
+        .iter()
+        .map(|(hn, dv)| dv * hn.dot(n).max(0.0))
+        .fold(0.0, f64::max);
     let mu_dvn = inp.friction * (dvn + held);
     let vt_new = if vt_len <= mu_dvn {
         Vec3::ZERO

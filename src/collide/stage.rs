@@ -132,6 +132,9 @@ pub enum StageError {
     },
 }
 
+/// Up to three (normal, normal velocity change) a vertex was held with (zero: unused).
+pub(crate) type Held = [(Vec3, f64); 3];
+
 pub struct CollisionStage {
     settings: CollisionSettings,
     obstacles: Vec<Obstacle>,
@@ -158,9 +161,10 @@ pub struct CollisionStage {
     culling: bool,
     /// Per obstacle: near enough to the cloth to be tested this step.
     near: Vec<bool>,
-    /// Per vertex, the normal and normal velocity change (m/s) the implicit solver's contact
-    /// filter applied this step (see `set_held`); used once by the next `resolve`.
-    held: Vec<(Vec3, f64)>,
+    /// Per vertex, the normals and normal velocity changes (m/s) the implicit solver's contact
+    /// filter applied this step, one per held surface (see `set_held`); used once by the next
+    /// `resolve`.
+    held: Vec<Held>,
 }
 
 impl CollisionStage {
@@ -289,19 +293,23 @@ impl CollisionStage {
     }
 
     /// Records that the solver held `vertex` against a surface of normal `normal` this step,
-    /// removing the normal velocity `dvn` (m/s, >= 0) that the other forces would have given it.
+    /// removing the normal velocity `dvn` (m/s, >= 0) that gravity would have given it (the
+    /// caller's estimate of the filter's normal impulse per unit mass).
     /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
     /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
-    /// velocity change it sees; without it a held vertex slides frictionless.
+    /// velocity change it sees; without it a held vertex slides frictionless. A vertex held by
+    /// several surfaces (a wedge) gets one call per surface; a fourth one is ignored.
     pub fn set_held(&mut self, vertex: usize, normal: Vec3, dvn: f64) {
         if vertex >= self.n_vertices || !(dvn.is_finite() && dvn > 0.0) || !normal.is_finite() {
             return;
         }
         if self.held.len() != self.n_vertices {
             self.held.clear();
-            self.held.resize(self.n_vertices, (Vec3::ZERO, 0.0));
+            self.held.resize(self.n_vertices, [(Vec3::ZERO, 0.0); 3]);
         }
-        self.held[vertex] = (normal, dvn);
+        if let Some(slot) = self.held[vertex].iter_mut().find(|s| s.1 == 0.0) {
+            *slot = (normal, dvn);
+        }
     }
 
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
@@ -333,8 +341,15 @@ impl CollisionStage {
     /// thickness cannot be `thickness` away from both: projected out of one layer after the
     /// other, it ended inside the first obstacle's solid, and alternating projections step after
     /// step pumped energy into its springs. Put it midway between the two surfaces instead, with
-    /// the normal velocity of their mean.
-    fn center_pinched(&self, x0: &[Vec3], x1: &mut [Vec3], v1: &mut [Vec3], n: usize) {
+    /// the normal velocity of their mean. Returns the centred vertices with their new state.
+    fn center_pinched(
+        &self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        n: usize,
+    ) -> Vec<(usize, Vec3, Vec3)> {
+        let mut pinched = Vec::new();
         let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
             .contacts
             .iter()
@@ -377,6 +392,64 @@ impl CollisionStage {
             x1[i] += na * (0.5 * gap - da);
             let vs = 0.5 * (group[a].3 + group[b].3).dot(na);
             v1[i] += na * (vs - v1[i].dot(na));
+            pinched.push((i, x1[i], v1[i]));
+        }
+        pinched
+    }
+
+    /// A vertex in contact with two or more obstacles and not pinched between them (a wedge:
+    /// cloth pressed by a robot's hand against its torso) is pushed out of one layer after
+    /// the other, in obstacle order: leaving the last one along its normal can carry it back into
+    /// an earlier one, whose solid it then ends inside. Alternating projections onto the layers
+    /// converge to their intersection (each round shrinks the remaining depth by the cosine of
+    /// the wedge's normals); approaching normal velocity is removed for each surface on the way.
+    fn separate_wedged(
+        &self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        n: usize,
+        pinched: &[(usize, Vec3, Vec3)],
+    ) {
+        const ROUNDS: usize = 8;
+        let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
+            .contacts
+            .iter()
+            .map(|c| (c.vertex, c.obstacle, c.normal, c.surface_velocity))
+            .collect();
+        by_vertex.sort_by_key(|c| c.0);
+        for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0 as usize;
+            // A pinched vertex (facing surfaces closer than two thicknesses) cannot leave both
+            // layers: `center_pinched` put it midway.
+            if group.len() < 2 || i >= n || pinched.iter().any(|p| p.0 == i) {
+                continue;
+            }
+            let th = self.thickness[i];
+            for _ in 0..ROUNDS {
+                let mut moved = false;
+                for &(_, oi, _, surface_velocity) in group {
+                    let o = &self.obstacles[oi];
+                    let local = o.pose.inverse_transform_point(x1[i]);
+                    let hint = o.pose_prev.inverse_transform_point(x0[i]);
+                    let sp = o.closest_local(local, hint);
+                    // Rounding-level depths are left alone (the rounds would never end).
+                    let inside = sp.signed_distance < th * (1.0 - 1e-6);
+                    if !inside {
+                        continue;
+                    }
+                    let normal = o.pose.transform_vector(sp.normal);
+                    x1[i] += normal * (th - sp.signed_distance);
+                    let vn = (v1[i] - surface_velocity).dot(normal);
+                    if vn < 0.0 {
+                        v1[i] -= normal * vn;
+                    }
+                    moved = true;
+                }
+                if !moved {
+                    break;
+                }
+            }
         }
     }
 
@@ -465,7 +538,7 @@ impl CollisionStage {
                             h,
                             mode,
                             response,
-                            held: held.get(i).copied().unwrap_or((Vec3::ZERO, 0.0)),
+                            held: held.get(i).copied().unwrap_or([(Vec3::ZERO, 0.0); 3]),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -506,7 +579,8 @@ impl CollisionStage {
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
-        self.center_pinched(x0, x1, v1, n);
+        let pinched = self.center_pinched(x0, x1, v1, n);
+        self.separate_wedged(x0, x1, v1, n, &pinched);
 
         let mut report = CollisionReport {
             culled,
@@ -535,6 +609,14 @@ impl CollisionStage {
                 self.feature_collider
                     .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
         }
+        // A pinched vertex cannot be `thickness` from both surfaces, so neither can the cloth
+        // edges and faces around it be from the obstacles' edges: their feature contacts push it
+        // along a slanted normal, the vertex pass and the centring restore only its height, and
+        // the sideways part accumulated every substep, squeezing the cloth out from under a press
+        // (9 J of spring energy, 3.1 m/s). Its place is the pinch's: undo the feature pass on it.
+        for &(i, x, v) in &pinched {
+            (x1[i], v1[i], moved[i]) = (x, v, false);
+        }
         if report.feature_contacts > 0 {
             // A face pushed off a feature can carry a vertex into the obstacle's faces: test the
             // moved vertices again, keeping the latest contact per (obstacle, vertex).
@@ -545,7 +627,8 @@ impl CollisionStage {
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
-            self.center_pinched(x0, x1, v1, n);
+            let pinched = self.center_pinched(x0, x1, v1, n);
+            self.separate_wedged(x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;
         self.held.clear();

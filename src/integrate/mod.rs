@@ -28,6 +28,9 @@ pub enum Filter {
     /// The component along this unit direction is prescribed (a contact normal); the vertex
     /// moves freely in the plane orthogonal to it.
     Direction(Vec3),
+    /// Only the component along this unit direction is free (a vertex held by two contact
+    /// surfaces at once slides along their common edge line; both normals are prescribed).
+    Line(Vec3),
     /// Fully prescribed (pinned or attached vertices).
     Fixed,
 }
@@ -39,6 +42,7 @@ impl Filter {
         match *self {
             Filter::Free => a,
             Filter::Direction(n) => a - n * n.dot(a),
+            Filter::Line(e) => e * e.dot(a),
             Filter::Fixed => Vec3::ZERO,
         }
     }
@@ -53,6 +57,7 @@ impl Filter {
         match *self {
             Filter::Free => Mat3::IDENTITY,
             Filter::Direction(n) => Mat3::IDENTITY - crate::effects::outer_pub(n, n),
+            Filter::Line(e) => crate::effects::outer_pub(e, e),
             Filter::Fixed => Mat3::ZERO,
         }
     }

@@ -20,7 +20,7 @@ mod guard;
 pub use guard::{DivergenceError, DivergencePolicy, GuardSettings, Symptom};
 
 use crate::cloth::{Cloth, Kinematic};
-use crate::collide::CollisionStage;
+use crate::collide::{CollisionStage, HeldNormals};
 use crate::effects::{EffectSet, State};
 use crate::integrate::{Constraints, Dynamics, Filter, Integrator, IntegratorStats};
 use crate::{Pose, Vec3};
@@ -477,7 +477,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        self.contact_constraints(t, h);
+        let held = self.contact_constraints(t);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -559,6 +559,29 @@ impl Simulation {
             for (i, _) in &self.cloth.kinematic {
                 self.inv_mass[*i as usize] = 0.0;
             }
+            // Normal impulse per unit mass the filter gave each held vertex, for friction:
+            // implicit Euler is `m (v1 - v0) = h f(x1, v1) + impulse`. (Start-of-step forces,
+            // `f0 h / m`, overstate it up to 1e3 times for a vertex pressed by springs that the
+            // implicit step relaxes: every held vertex then stuck, and friction's projection
+            // back stretched the springs every step.)
+            if !held.is_empty() {
+                crate::integrate::scratch(&mut self.scratch_f, n);
+                let s = State {
+                    t: t + h,
+                    x: &self.cloth.x,
+                    v: &self.cloth.v,
+                };
+                self.effects.forces(&s, &mut self.scratch_f);
+                for (i, normals) in &held {
+                    let i = *i;
+                    let dv = self.cloth.v[i]
+                        - self.v_save[i]
+                        - self.scratch_f[i] * (h / self.cloth.mass[i]);
+                    for (normal, dvn) in normals.normals().iter().zip(normals.split(dv)) {
+                        stage.set_held(i, *normal, dvn);
+                    }
+                }
+            }
             let before = self.energy_cache;
             let r = stage.resolve(
                 &self.x_save,
@@ -615,12 +638,15 @@ impl Simulation {
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
     /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
     /// vertex is pulled away from the surface by the other forces is released instead of held.
-    fn contact_constraints(&mut self, t: f64, h: f64) {
-        let Some(stage) = self.collision.as_mut() else {
-            return;
+    /// A vertex held by two or three surfaces keeps its velocity along all their normals (see
+    /// [`HeldNormals`]). Returns the held vertices with their normals.
+    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals)> {
+        let mut held = Vec::new();
+        let Some(stage) = self.collision.as_ref() else {
+            return held;
         };
         if !stage.settings().response.uses_filter() || stage.contacts().is_empty() {
-            return;
+            return held;
         }
         let n = self.cloth.len();
         crate::integrate::scratch(&mut self.scratch_f, n);
@@ -630,23 +656,27 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
-        let mut held = Vec::new();
-        for c in stage.contacts() {
-            let i = c.vertex as usize;
-            if i >= n || self.constraints.filter[i] == Filter::Fixed {
-                continue;
-            }
-            let load = self.scratch_f[i].dot(c.normal);
-            if load <= 0.0 {
-                self.constraints.filter[i] = Filter::Direction(c.normal);
-                self.constraints.target_velocity[i] = c.surface_velocity;
-                // The normal velocity the filter takes away this step, for friction.
-                held.push((i, c.normal, -load * h / self.cloth.mass[i]));
-            }
+        // The pressing contacts, grouped by vertex (in contact order within a vertex).
+        let mut pressing: Vec<(usize, Vec3, Vec3)> = stage
+            .contacts()
+            .iter()
+            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity))
+            .filter(|&(i, normal, _)| {
+                i < n
+                    && self.constraints.filter[i] != Filter::Fixed
+                    && self.scratch_f[i].dot(normal) <= 0.0
+            })
+            .collect();
+        pressing.sort_by_key(|c| c.0);
+        for group in pressing.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0;
+            let normals = HeldNormals::from_contacts(group.iter().map(|c| (c.1, c.2)));
+            let (filter, target) = normals.filter();
+            self.constraints.filter[i] = filter;
+            self.constraints.target_velocity[i] = target;
+            held.push((i, normals));
         }
-        for &(i, normal, dvn) in &held {
-            stage.set_held(i, normal, dvn);
-        }
+        held
     }
 
     /// Work done on the cloth during the substep by forces from outside it (wind and moving
