@@ -12,7 +12,7 @@ mod precond;
 mod rk4;
 mod sparse;
 
-pub use explicit::{ExplicitEuler, SymplecticEuler};
+pub use explicit::{Euler, ExplicitEuler, SymplecticEuler};
 pub use implicit::{Implicit, ImplicitSettings};
 pub use rk4::Rk4;
 pub use sparse::{BlockCsr, PatternBuilder};
