@@ -6,7 +6,7 @@
 
 use super::{outer, Effect, State, StiffnessBound};
 use crate::cloth::topology::Spring;
-use crate::integrate::{BlockCsr, PatternBuilder};
+use crate::integrate::{BlockCsr, PairSlots, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 pub struct Springs {
@@ -18,6 +18,8 @@ pub struct Springs {
     vertex_bound: usize,
     /// Scene parameter per spring group, for diagnostics.
     parameter: String,
+    /// Jacobian block slots of every spring (no search per step).
+    slots: PairSlots,
 }
 
 impl Springs {
@@ -35,6 +37,7 @@ impl Springs {
             k,
             vertex_bound,
             parameter,
+            slots: PairSlots::default(),
         }
     }
 
@@ -225,7 +228,10 @@ impl Effect for Springs {
     }
 
     fn add_jacobians(&self, st: &State, dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {
-        for (s, &k) in self.springs.iter().zip(&self.k) {
+        let slots = self
+            .slots
+            .get(dfdx, self.springs.iter().map(|s| (s.i, s.j)));
+        for ((s, &k), sl) in self.springs.iter().zip(&self.k).zip(&slots.1) {
             let d = st.x[s.i as usize] - st.x[s.j as usize];
             let len = d.length();
             let kii = if len > 0.0 {
@@ -237,10 +243,10 @@ impl Effect for Springs {
                 // Degenerate spring: keep the matrix definite with an isotropic stiffness.
                 Mat3::IDENTITY * -k
             };
-            dfdx.add(s.i, s.i, kii);
-            dfdx.add(s.j, s.j, kii);
-            dfdx.add(s.i, s.j, -kii);
-            dfdx.add(s.j, s.i, -kii);
+            dfdx.add_at(sl[0], kii);
+            dfdx.add_at(sl[1], kii);
+            dfdx.add_at(sl[2], -kii);
+            dfdx.add_at(sl[3], -kii);
         }
     }
 

@@ -15,7 +15,7 @@ mod sparse;
 pub use explicit::{Euler, ExplicitEuler, SymplecticEuler};
 pub use implicit::{Implicit, ImplicitSettings};
 pub use rk4::Rk4;
-pub use sparse::{BlockCsr, PatternBuilder};
+pub use sparse::{BlockCsr, PairSlots, PatternBuilder};
 
 use crate::effects::{EffectSet, State};
 use crate::{Mat3, Vec3};

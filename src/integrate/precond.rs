@@ -18,13 +18,17 @@
 
 use super::{BlockCsr, Filter};
 use crate::{Mat3, Vec3};
+use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;
 use thiserror::Error;
 
 /// Rows this large or larger are multiplied in parallel.
 const PAR_ROWS: usize = 2048;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
-const THETA: f64 = 0.08;
+const THETA: f32 = 0.08;
+/// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
+/// (Frobenius norms) are lumped onto the diagonal in the preconditioner (see [`Csr::filtered`]).
+const DROP: f64 = 1e-3;
 /// Stop coarsening at this many block rows; solve there with dense Cholesky.
 const COARSEST_ROWS: usize = 64;
 /// Larger coarsest levels (coarsening stalled) get symmetric Gauss-Seidel sweeps instead.
@@ -55,32 +59,59 @@ pub enum MultigridError {
 pub struct Csr {
     row_start: Vec<usize>,
     cols: Vec<u32>,
-    vals: Vec<Mat3>,
+    vals: Vec<M3>,
+    /// Scratch of [`Csr::filtered`]: `|A_ii|_F^1/2` per row.
+    dnorm: Vec<f64>,
 }
 
 impl Csr {
     /// `S A S + c (I - S)` per vertex, `c` = trace(A_ii)/3, reusing this matrix's storage.
+    ///
+    /// Negligible couplings (`|A_ij|_F <= DROP |A_ii|_F^1/2 |A_jj|_F^1/2`) that are symmetric
+    /// positive semidefinite blocks `B`, e.g. bending's distance-2 blocks `h^2 c I` next to
+    /// stretch springs, are lumped onto the diagonal: the change `[B, -B; -B, B]` is positive
+    /// semidefinite (the result stays SPD) and leaves rigid translations, the near-null space
+    /// the coarse levels are built on, untouched; the smoother and every coarse level get
+    /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
     pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
         let n = a.rows();
         self.row_start.clear();
         self.cols.clear();
         self.vals.clear();
         self.row_start.push(0);
+        self.dnorm.clear();
+        self.dnorm
+            .extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
+        let drop2 = DROP * DROP;
         for (i, fi) in filter.iter().enumerate().take(n) {
             let (cols, vals) = a.row(i);
             let si = fi.matrix();
+            let mut diag = usize::MAX;
+            let mut lumped = Mat3::ZERO;
             for (&j, &blk) in cols.iter().zip(vals) {
                 let fj = &filter[j as usize];
                 let mut m = match (fi, fj) {
                     (Filter::Free, Filter::Free) => blk,
                     _ => si * blk * fj.matrix(),
                 };
-                if j as usize == i && !matches!(fi, Filter::Free) {
-                    let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
-                    m += (Mat3::IDENTITY - si) * c;
+                if j as usize == i {
+                    if !matches!(fi, Filter::Free) {
+                        let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
+                        m += (Mat3::IDENTITY - si) * c;
+                    }
+                    diag = self.cols.len();
+                } else {
+                    let scale = self.dnorm[i] * self.dnorm[j as usize];
+                    if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
+                        lumped += m;
+                        continue;
+                    }
                 }
                 self.cols.push(j);
-                self.vals.push(m);
+                self.vals.push(single(&m));
+            }
+            if diag != usize::MAX {
+                self.vals[diag] += single(&lumped);
             }
             self.row_start.push(self.cols.len());
         }
@@ -91,19 +122,19 @@ impl Csr {
     }
 
     #[inline]
-    fn row(&self, r: usize) -> (&[u32], &[Mat3]) {
+    fn row(&self, r: usize) -> (&[u32], &[M3]) {
         let (s, e) = (self.row_start[r], self.row_start[r + 1]);
         (&self.cols[s..e], &self.vals[s..e])
     }
 
     #[inline(always)]
-    fn row_times(&self, r: usize, x: &[Vec3]) -> Vec3 {
+    fn row_times(&self, r: usize, x: &[V3]) -> V3 {
         let (cols, vals) = self.row(r);
         row_dot(cols, vals, x)
     }
 
     /// `y = A x`.
-    pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
+    pub fn mul(&self, x: &[V3], y: &mut [V3]) {
         if y.len() >= PAR_ROWS {
             y.par_iter_mut()
                 .enumerate()
@@ -119,7 +150,7 @@ impl Csr {
     /// Sorts every row by column (Galerkin products leave them in first-touch order), so that
     /// the strictly lower and upper parts of a row are contiguous.
     fn sort_rows(&mut self) {
-        let mut row: Vec<(u32, Mat3)> = Vec::new();
+        let mut row: Vec<(u32, M3)> = Vec::new();
         for r in 0..self.rows() {
             let (s, e) = (self.row_start[r], self.row_start[r + 1]);
             if self.cols[s..e].is_sorted() {
@@ -153,7 +184,7 @@ impl Csr {
             .collect()
     }
 
-    fn diagonal_blocks(&self, level: usize) -> Result<Vec<Mat3>, MultigridError> {
+    fn diagonal_blocks(&self, level: usize) -> Result<Vec<M3>, MultigridError> {
         (0..self.rows())
             .map(|r| {
                 let (cols, vals) = self.row(r);
@@ -176,7 +207,7 @@ impl Csr {
         }
         let mut next = count.clone();
         let mut cols = vec![0u32; self.cols.len()];
-        let mut vals = vec![Mat3::ZERO; self.cols.len()];
+        let mut vals = vec![M3::ZERO; self.cols.len()];
         for r in 0..self.rows() {
             let (rc, rv) = self.row(r);
             for (&c, &m) in rc.iter().zip(rv) {
@@ -190,6 +221,7 @@ impl Csr {
             row_start: count,
             cols,
             vals,
+            dnorm: Vec::new(),
         }
     }
 
@@ -199,7 +231,7 @@ impl Csr {
         let chunk = rows
             .div_ceil(rayon::current_num_threads().max(1) * 4)
             .max(64);
-        let parts: Vec<(Vec<usize>, Vec<u32>, Vec<Mat3>)> = (0..rows)
+        let parts: Vec<(Vec<usize>, Vec<u32>, Vec<M3>)> = (0..rows)
             .step_by(chunk)
             .collect::<Vec<_>>()
             .into_par_iter()
@@ -208,7 +240,7 @@ impl Csr {
                 let mut marker = vec![usize::MAX; ncols];
                 let mut lens = Vec::with_capacity(end - start);
                 let mut cols = Vec::new();
-                let mut vals: Vec<Mat3> = Vec::new();
+                let mut vals: Vec<M3> = Vec::new();
                 for r in start..end {
                     let row_begin = cols.len();
                     let (ac, av) = self.row(r);
@@ -234,6 +266,7 @@ impl Csr {
             row_start: Vec::with_capacity(rows + 1),
             cols: Vec::new(),
             vals: Vec::new(),
+            dnorm: Vec::new(),
         };
         out.row_start.push(0);
         for (lens, cols, vals) in parts {
@@ -250,32 +283,59 @@ impl Csr {
 
 /// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
 #[inline(always)]
-fn row_dot(cols: &[u32], vals: &[Mat3], x: &[Vec3]) -> Vec3 {
+fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
     row_dot_at(cols, vals, x, 0)
 }
 
 /// [`row_dot`] with `x` holding the unknowns from index `offset` on.
 #[inline(always)]
-fn row_dot_at(cols: &[u32], vals: &[Mat3], x: &[Vec3], offset: usize) -> Vec3 {
-    let mut acc = Vec3::ZERO;
+fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
+    let mut acc = V3::ZERO;
     for (&j, m) in cols.iter().zip(vals) {
         acc += *m * x[j as usize - offset];
     }
     acc
 }
 
-fn frob2(m: &Mat3) -> f64 {
+/// Whether a block is exactly symmetric and positive semidefinite (all principal minors `>= 0`).
+fn symmetric_psd(m: &Mat3) -> bool {
+    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+    // Column-major: m[r][c] = col(c)[r].
+    if a.y != b.x || a.z != c.x || b.z != c.y {
+        return false;
+    }
+    let (d0, d1, d2) = (a.x, b.y, c.z);
+    d0 >= 0.0
+        && d1 >= 0.0
+        && d2 >= 0.0
+        && d0 * d1 - a.y * a.y >= 0.0
+        && d0 * d2 - a.z * a.z >= 0.0
+        && d1 * d2 - b.z * b.z >= 0.0
+        && m.determinant() >= 0.0
+}
+
+/// A 3x3 block in the preconditioner's single precision.
+#[inline]
+fn single(m: &Mat3) -> M3 {
+    M3::from(m.as_mat3())
+}
+
+fn frob2_f64(m: &Mat3) -> f64 {
+    m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()
+}
+
+fn frob2(m: &M3) -> f32 {
     m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()
 }
 
 /// Aggregates of the strong-connection graph (Vanek, Mandel, Brezina 1996): seeds whose strong
 /// neighbourhood is untouched become aggregates, leftovers join a neighbouring aggregate, the rest
 /// form their own. Returns the aggregate of each row and the aggregate count.
-fn aggregate(a: &Csr, diag: &[Mat3]) -> (Vec<u32>, usize) {
+fn aggregate(a: &Csr, diag: &[M3]) -> (Vec<u32>, usize) {
     let n = a.rows();
-    let dnorm: Vec<f64> = diag.iter().map(|d| frob2(d).sqrt()).collect();
+    let dnorm: Vec<f32> = diag.iter().map(|d| frob2(d).sqrt()).collect();
     let strong =
-        |i: usize, j: usize, m: &Mat3| i != j && frob2(m) >= THETA * THETA * dnorm[i] * dnorm[j];
+        |i: usize, j: usize, m: &M3| i != j && frob2(m) >= THETA * THETA * dnorm[i] * dnorm[j];
     const NONE: u32 = u32::MAX;
     let mut agg = vec![NONE; n];
     let mut count = 0u32;
@@ -334,20 +394,20 @@ fn aggregate(a: &Csr, diag: &[Mat3]) -> (Vec<u32>, usize) {
 }
 
 /// Largest eigenvalue of `D^-1 A` by power iteration (a slight overestimate is harmless).
-fn spectral_radius(a: &Csr, dinv: &[Mat3]) -> f64 {
+fn spectral_radius(a: &Csr, dinv: &[M3]) -> f32 {
     let n = a.rows();
     // Deterministic, non-smooth start vector.
-    let mut x: Vec<Vec3> = (0..n)
+    let mut x: Vec<V3> = (0..n)
         .map(|i| {
-            let t = i as f64;
-            Vec3::new(
+            let t = i as f32;
+            V3::new(
                 (t * 0.618).fract() - 0.5,
                 (t * 0.414).fract() - 0.5,
                 (t * 0.732).fract() - 0.5,
             )
         })
         .collect();
-    let mut y = vec![Vec3::ZERO; n];
+    let mut y = vec![V3::ZERO; n];
     let mut rho = 1.0;
     for _ in 0..12 {
         a.mul(&x, &mut y);
@@ -356,7 +416,7 @@ fn spectral_radius(a: &Csr, dinv: &[Mat3]) -> f64 {
             *yi = *di * *yi;
             norm += yi.length_squared();
         }
-        let xnorm: f64 = x.iter().map(|v| v.length_squared()).sum();
+        let xnorm: f32 = x.iter().map(|v| v.length_squared()).sum();
         if !(norm > 0.0 && xnorm > 0.0) {
             break;
         }
@@ -370,13 +430,14 @@ fn spectral_radius(a: &Csr, dinv: &[Mat3]) -> f64 {
 }
 
 /// `P = (I - omega D^-1 A) P_tent`, `P_tent` = one identity block per row in its aggregate column.
-fn smoothed_prolongator(a: &Csr, dinv: &[Mat3], agg: &[u32], nc: usize, omega: f64) -> Csr {
+fn smoothed_prolongator(a: &Csr, dinv: &[M3], agg: &[u32], nc: usize, omega: f32) -> Csr {
     let n = a.rows();
     let mut marker = vec![usize::MAX; nc];
     let mut p = Csr {
         row_start: Vec::with_capacity(n + 1),
         cols: Vec::new(),
         vals: Vec::new(),
+        dnorm: Vec::new(),
     };
     p.row_start.push(0);
     for i in 0..n {
@@ -400,10 +461,10 @@ fn smoothed_prolongator(a: &Csr, dinv: &[Mat3], agg: &[u32], nc: usize, omega: f
         let own = agg[i] as usize;
         let slot = marker[own];
         if slot != usize::MAX && slot >= begin {
-            p.vals[slot] += Mat3::IDENTITY;
+            p.vals[slot] += M3::IDENTITY;
         } else {
             p.cols.push(own as u32);
-            p.vals.push(Mat3::IDENTITY);
+            p.vals.push(M3::IDENTITY);
         }
         p.row_start.push(p.cols.len());
     }
@@ -427,7 +488,7 @@ impl Dense {
                 for bi in 0..3 {
                     for bj in 0..3 {
                         // glam is column-major: col(bj)[bi] is row bi, column bj.
-                        l[(3 * r + bi) * n + 3 * c as usize + bj] = m.col(bj)[bi];
+                        l[(3 * r + bi) * n + 3 * c as usize + bj] = f64::from(m.col(bj)[bi]);
                     }
                 }
             }
@@ -453,10 +514,10 @@ impl Dense {
         Ok(Dense { n, l })
     }
 
-    fn solve(&self, b: &[Vec3], x: &mut [Vec3], tmp: &mut Vec<f64>) {
+    fn solve(&self, b: &[V3], x: &mut [V3], tmp: &mut Vec<f64>) {
         let n = self.n;
         tmp.clear();
-        tmp.extend(b.iter().flat_map(|v| [v.x, v.y, v.z]));
+        tmp.extend(b.iter().flat_map(|v| [v.x, v.y, v.z].map(f64::from)));
         for i in 0..n {
             let row = &self.l[i * n..i * n + i];
             let s: f64 = row.iter().zip(&tmp[..i]).map(|(l, t)| l * t).sum();
@@ -467,7 +528,11 @@ impl Dense {
             tmp[i] = (tmp[i] - s) / self.l[i * n + i];
         }
         for (i, xi) in x.iter_mut().enumerate() {
-            *xi = Vec3::new(tmp[3 * i], tmp[3 * i + 1], tmp[3 * i + 2]);
+            *xi = V3::new(
+                tmp[3 * i] as f32,
+                tmp[3 * i + 1] as f32,
+                tmp[3 * i + 2] as f32,
+            );
         }
     }
 }
@@ -481,7 +546,7 @@ struct Halves {
     /// Value index of the first block of each row whose column is `>= mid`.
     split: Vec<usize>,
     /// `x` before the backward sweep: what each half reads across the cut.
-    x_old: Vec<Vec3>,
+    x_old: Vec<V3>,
 }
 
 impl Halves {
@@ -493,7 +558,7 @@ impl Halves {
         let mut h = Halves {
             mid: n / 2,
             split: Vec::with_capacity(n),
-            x_old: vec![Vec3::ZERO; n],
+            x_old: vec![V3::ZERO; n],
         };
         h.find_split(a);
         Some(h)
@@ -516,16 +581,16 @@ struct Level {
     a: Csr,
     /// Value index of each row's diagonal block in `a`.
     diag: Vec<usize>,
-    dinv: Vec<Mat3>,
+    dinv: Vec<M3>,
     /// The two halves of a large level, smoothed in parallel.
     halves: Option<Halves>,
     /// Prolongator to this level from the next coarser one and its transpose (empty on the
     /// coarsest level).
     p: Csr,
     pt: Csr,
-    x: Vec<Vec3>,
-    b: Vec<Vec3>,
-    r: Vec<Vec3>,
+    x: Vec<V3>,
+    b: Vec<V3>,
+    r: Vec<V3>,
 }
 
 impl Level {
@@ -542,9 +607,9 @@ impl Level {
             halves,
             p: Csr::default(),
             pt: Csr::default(),
-            x: vec![Vec3::ZERO; n],
-            b: vec![Vec3::ZERO; n],
-            r: vec![Vec3::ZERO; n],
+            x: vec![V3::ZERO; n],
+            b: vec![V3::ZERO; n],
+            r: vec![V3::ZERO; n],
         })
     }
 
@@ -579,7 +644,7 @@ impl Level {
         } = self;
         let n = a.rows();
         // The lower part starts at the row start, or at the cut for the second half.
-        let sweep = |rows: std::ops::Range<usize>, cut: Option<&[usize]>, x: &mut [Vec3]| {
+        let sweep = |rows: std::ops::Range<usize>, cut: Option<&[usize]>, x: &mut [V3]| {
             let offset = rows.start;
             for i in rows {
                 let lower = cut.map_or(a.row_start[i], |c| c[i])..diag[i];
@@ -618,7 +683,7 @@ impl Level {
         let (mid, split, x_old) = (h.mid, &h.split, &h.x_old);
         let (xa, xb) = x.split_at_mut(mid);
         // Row `i`'s own-half columns are `own(i)`, the rest read `x_old`.
-        let sweep = |rows: std::ops::Range<usize>, x: &mut [Vec3]| {
+        let sweep = |rows: std::ops::Range<usize>, x: &mut [V3]| {
             let offset = rows.start;
             for i in rows.rev() {
                 let (s, e) = (a.row_start[i], a.row_start[i + 1]);
@@ -661,7 +726,7 @@ impl Level {
     }
 }
 
-fn invert_diagonal(a: &Csr, level: usize) -> Result<Vec<Mat3>, MultigridError> {
+fn invert_diagonal(a: &Csr, level: usize) -> Result<Vec<M3>, MultigridError> {
     let diag = a.diagonal_blocks(level)?;
     diag.iter()
         .enumerate()
@@ -767,11 +832,16 @@ impl Multigrid {
         std::mem::take(&mut self.levels[0].a)
     }
 
-    /// `z = M^-1 r`, one V(1,1)-cycle.
+    /// `z = M^-1 r`, one V(1,1)-cycle (in single precision: only the preconditioner's
+    /// accuracy depends on it, never the residual PCG checks, which stays in double).
     pub fn apply(&mut self, r: &[Vec3], z: &mut [Vec3]) {
-        self.levels[0].b.copy_from_slice(r);
+        for (b, r) in self.levels[0].b.iter_mut().zip(r) {
+            *b = r.as_vec3a();
+        }
         cycle(&mut self.levels, self.dense.as_ref(), &mut self.tmp);
-        z.copy_from_slice(&self.levels[0].x);
+        for (z, x) in z.iter_mut().zip(&self.levels[0].x) {
+            *z = x.as_dvec3();
+        }
     }
 }
 
@@ -783,7 +853,7 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         match dense {
             Some(d) => d.solve(&l.b, &mut l.x, tmp),
             None => {
-                l.x.iter_mut().for_each(|x| *x = Vec3::ZERO);
+                l.x.iter_mut().for_each(|x| *x = V3::ZERO);
                 for _ in 0..COARSE_SWEEPS {
                     l.gauss_seidel(false);
                     l.gauss_seidel(true);
@@ -801,4 +871,63 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
         *xi += *ci;
     }
     l.backward_sweep();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::PatternBuilder;
+
+    /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
+    /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
+    /// matrix keeps its action on translations, and stays SPD (Cholesky of the dense copy).
+    #[test]
+    fn weak_positive_couplings_are_lumped_and_translations_kept() {
+        let mut p = PatternBuilder::new();
+        for (i, j) in [(0, 1), (1, 2), (0, 2), (0, 3)] {
+            p.couple(i, j);
+        }
+        let mut a = p.build(4);
+        let spring = |a: &mut BlockCsr, i: u32, j: u32, k: Mat3| {
+            a.add(i, i, k);
+            a.add(j, j, k);
+            a.add(i, j, -k);
+            a.add(j, i, -k);
+        };
+        let d = Vec3::new(1.0, 0.2, -0.1).normalize();
+        let k = Mat3::from_cols(d * d.x, d * d.y, d * d.z) + Mat3::IDENTITY * 0.1;
+        spring(&mut a, 0, 1, k);
+        spring(&mut a, 1, 2, k);
+        spring(&mut a, 0, 3, k * 1e-5);
+        // Bending-like: energy c |x0 - 2 x1 + x2|^2 / 2 gives +c on the (0, 2) blocks.
+        let c = 1e-5;
+        let w = [1.0, -2.0, 1.0];
+        for (ia, wa) in w.iter().enumerate() {
+            for (ib, wb) in w.iter().enumerate() {
+                a.add(ia as u32, ib as u32, Mat3::IDENTITY * (c * wa * wb));
+            }
+        }
+        a.add_diagonal(&[1e-3; 4]);
+        let mut f = Csr::default();
+        f.filtered(&a, &[Filter::Free; 4]);
+        let cols: Vec<Vec<u32>> = (0..4).map(|r| f.row(r).0.to_vec()).collect();
+        assert_eq!(
+            cols[0],
+            vec![0, 1, 3],
+            "(0, 2) lumped, weak spring (0, 3) kept"
+        );
+        assert_eq!(cols[2], vec![1, 2]);
+        // Same product with every translation.
+        for t in [Vec3::X, Vec3::Y, Vec3::new(0.3, -1.0, 2.0)] {
+            let (mut y0, mut y1) = (vec![Vec3::ZERO; 4], vec![V3::ZERO; 4]);
+            a.mul(&[t; 4], &mut y0);
+            f.mul(&[t.as_vec3a(); 4], &mut y1);
+            // Single precision: a few ulps of the O(1) blocks. Dropping the lumped coupling
+            // instead would be off by c |t| >= 1e-5.
+            for (u, v) in y0.iter().zip(&y1) {
+                assert!((*u - v.as_dvec3()).length() <= 1e-6, "{u} vs {v}");
+            }
+        }
+        assert!(Dense::factor(&f).is_ok());
+    }
 }

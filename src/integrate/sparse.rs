@@ -5,6 +5,11 @@
 
 use crate::{Mat3, Vec3};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
+
+/// Source of [`BlockCsr::pattern_id`]s.
+static NEXT_PATTERN: AtomicU64 = AtomicU64::new(1);
 
 /// Rows this large or larger are multiplied in parallel.
 const PAR_ROWS: usize = 2048;
@@ -62,6 +67,7 @@ impl PatternBuilder {
             cols,
             diag,
             zero: true,
+            pattern: NEXT_PATTERN.fetch_add(1, Ordering::Relaxed),
         }
     }
 }
@@ -76,11 +82,20 @@ pub struct BlockCsr {
     /// No value was added since the last clear, so every block is zero: lets the solver skip
     /// clearing, copying and combining empty matrices (df/dv of a scene without damping).
     zero: bool,
+    /// Identifies the pattern (shared by clones): cached slot indices are valid for it.
+    pattern: u64,
 }
 
 impl BlockCsr {
     pub fn rows(&self) -> usize {
         self.row_start.len() - 1
+    }
+
+    /// Identifier of this matrix's sparsity pattern, equal for clones and unique per
+    /// [`PatternBuilder::build`]: slot indices computed for one matrix serve every matrix with
+    /// the same id.
+    pub fn pattern_id(&self) -> u64 {
+        self.pattern
     }
 
     pub fn nnz_blocks(&self) -> usize {
@@ -192,6 +207,30 @@ impl BlockCsr {
     }
 }
 
+/// Value slots `(ii, jj, ij, ji)` of a fixed list of vertex pairs, computed once per pattern, so
+/// that assembling a pair's 2x2 blocks every step needs no search.
+#[derive(Debug, Default)]
+pub struct PairSlots(Mutex<(u64, Vec<[usize; 4]>)>);
+
+impl PairSlots {
+    /// The slots of `pairs` in `m` (recomputed when `m` has another pattern than last time).
+    pub fn get(
+        &self,
+        m: &BlockCsr,
+        pairs: impl Iterator<Item = (u32, u32)>,
+    ) -> MutexGuard<'_, (u64, Vec<[usize; 4]>)> {
+        let mut g = self.0.lock().unwrap_or_else(|p| p.into_inner());
+        if g.0 != m.pattern_id() {
+            g.1.clear();
+            g.1.extend(
+                pairs.map(|(i, j)| [m.slot(i, i), m.slot(j, j), m.slot(i, j), m.slot(j, i)]),
+            );
+            g.0 = m.pattern_id();
+        }
+        g
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -217,5 +256,26 @@ mod tests {
         assert_eq!(y[1], Vec3::new(0., 3., 0.));
         assert_eq!(y[2], a.transpose() * x[0]);
         assert_eq!(m.nnz_blocks(), 7); // 3 diagonal + 2 symmetric pairs
+    }
+
+    /// Cached pair slots match the searched ones, follow a new pattern, and clones share theirs.
+    #[test]
+    fn pair_slots_follow_the_pattern() {
+        let build = |pairs: &[(u32, u32)]| {
+            let mut p = PatternBuilder::new();
+            pairs.iter().for_each(|&(i, j)| p.couple(i, j));
+            p.build(5)
+        };
+        let (a, b) = (build(&[(0, 3), (3, 4)]), build(&[(0, 3), (1, 3), (3, 4)]));
+        assert_eq!(a.pattern_id(), a.clone().pattern_id());
+        assert_ne!(a.pattern_id(), b.pattern_id());
+        let cache = PairSlots::default();
+        for m in [&a, &b, &a] {
+            let pairs = [(0u32, 3u32), (3, 4)];
+            let g = cache.get(m, pairs.iter().copied());
+            for (&(i, j), s) in pairs.iter().zip(&g.1) {
+                assert_eq!(*s, [m.slot(i, i), m.slot(j, j), m.slot(i, j), m.slot(j, i)]);
+            }
+        }
     }
 }
