@@ -255,6 +255,11 @@ pub(crate) struct ClothState<'a> {
     pub friction: &'a [f64],
     pub h: f64,
     pub mode: DetectionMode,
+    /// Per vertex, the normals the implicit filter held it against this step with the normal
+    /// velocity change it applied (see `CollisionStage::set_held`; empty: none).
+    pub held: &'a [super::stage::Held],
+    /// Per vertex, the normals whose friction the solver applied (empty: none).
+    pub friction_solved: &'a [[Vec3; 3]],
 }
 
 /// Cloth topology and scratch buffers for feature contacts (kept across steps).
@@ -330,7 +335,14 @@ impl FeatureCollider {
             self.moved.resize(x1.len(), false);
             let mut any = false;
             for hit in &self.hits {
-                let r = respond(o, f.radius, hit, s, x1, v1, &mut self.moved);
+                let r = respond(
+                    o,
+                    f.radius,
+                    hit,
+                    s,
+                    (x1, v1),
+                    &mut self.moved,
+                );
                 answered += usize::from(r.is_some());
                 any |= r.unwrap_or(false);
             }
@@ -552,8 +564,7 @@ fn respond(
     radius: f64,
     hit: &Hit,
     s: &ClothState,
-    x1: &mut [Vec3],
-    v1: &mut [Vec3],
+    (x1, v1): (&mut [Vec3], &mut [Vec3]),
     touched: &mut [bool],
 ) -> Option<bool> {
     let idx = hit.verts.map(|v| v as usize);
@@ -586,7 +597,6 @@ fn respond(
         }
         moved = true;
     }
-
     let mu = o
         .friction
         .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
@@ -604,16 +614,29 @@ fn respond(
         }
         let rel = v1[idx[k]] - vs;
         let vn = rel.dot(n);
-        if vn >= 0.0 {
+        let held_here = s
+            .held
+            .get(idx[k])
+            .is_some_and(|h| h.iter().any(|(hn, dv)| *dv > 0.0 && hn.dot(n) > 0.9));
+        if vn >= 0.0 && !held_here {
             continue;
         }
-        let dvn = -vn;
+        let i = idx[k];
+        let held = 0.0;
+        let solved = s
+            .friction_solved
+            .get(i)
+            .is_some_and(|fs| fs.iter().any(|sn| *sn != Vec3::ZERO && sn.dot(n) > 0.9));
+        let dvn = (-vn).max(0.0);
         let vt = rel - n * vn;
         let vt_len = vt.length();
-        let vt_new = if vt_len <= mu * dvn {
+        let mu_dvn = if solved { 0.0 } else { mu * (dvn + held) };
+        let vt_new = if solved {
+            vt
+        } else if vt_len <= mu_dvn {
             Vec3::ZERO
         } else {
-            vt * (1.0 - mu * dvn / vt_len)
+            vt * (1.0 - mu_dvn / vt_len)
         };
         v1[idx[k]] += n * dvn + (vt_new - vt);
         touched[idx[k]] = true;

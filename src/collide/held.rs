@@ -75,6 +75,11 @@ impl HeldNormals {
         &self.normals[..self.len]
     }
 
+    /// The surface velocity of each kept normal (a pinch's: the mean of its two surfaces).
+    pub fn surfaces(&self) -> &[Vec3] {
+        &self.surface[..self.len]
+    }
+
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }

@@ -33,6 +33,9 @@ pub(crate) struct VertexInput {
     /// step, one per held surface (zero when not held): the one along this contact's normal
     /// counts in its friction bound.
     pub held: super::stage::Held,
+    /// Normals of the surfaces whose friction the solver applied already (zero: unused): their
+    /// contacts keep the tangential velocity it left.
+    pub friction_solved: [Vec3; 3],
 }
 
 /// Detects and answers one vertex against one obstacle, updating `x` (end position) and `v`.
@@ -93,7 +96,15 @@ pub(crate) fn obstacle_vertex(
         .map(|(hn, dv)| dv * hn.dot(n).max(0.0))
         .fold(0.0, f64::max);
     let mu_dvn = inp.friction * (dvn + held);
-    let vt_new = if vt_len <= mu_dvn {
+    // Cosine above which a contact normal is one of the held surfaces.
+    const SAME_SURFACE: f64 = 0.9;
+    let solved = inp
+        .friction_solved
+        .iter()
+        .any(|sn| *sn != Vec3::ZERO && sn.dot(n) > SAME_SURFACE);
+    let vt_new = if solved {
+        vt
+    } else if vt_len <= mu_dvn {
         Vec3::ZERO
     } else {
         vt * (1.0 - mu_dvn / vt_len)

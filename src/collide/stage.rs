@@ -165,6 +165,9 @@ pub struct CollisionStage {
     /// filter applied this step, one per held surface (see `set_held`); used once by the next
     /// `resolve`.
     held: Vec<Held>,
+    /// Per vertex: the normals of held surfaces whose friction the solver applied (zero:
+    /// unused; see `set_friction_solved`); used once by the next `resolve`.
+    friction_solved: Vec<[Vec3; 3]>,
 }
 
 impl CollisionStage {
@@ -214,6 +217,7 @@ impl CollisionStage {
             feature_collider,
             feature_moved: Vec::new(),
             held: Vec::new(),
+            friction_solved: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -310,6 +314,35 @@ impl CollisionStage {
         if let Some(slot) = self.held[vertex].iter_mut().find(|s| s.1 == 0.0) {
             *slot = (normal, dvn);
         }
+    }
+
+    /// Records that the solver applied the Coulomb friction of the surface with `normal` to
+    /// `vertex` (held against it, see `set_held`): the next `resolve` leaves the tangential
+    /// velocity of that contact alone instead of applying friction a second time.
+    pub fn set_friction_solved(&mut self, vertex: usize, normal: Vec3) {
+        if vertex >= self.n_vertices || !normal.is_finite() {
+            return;
+        }
+        if self.friction_solved.len() != self.n_vertices {
+            self.friction_solved.clear();
+            self.friction_solved.resize(self.n_vertices, [Vec3::ZERO; 3]);
+        }
+        if let Some(slot) = self.friction_solved[vertex]
+            .iter_mut()
+            .find(|s| **s == Vec3::ZERO)
+        {
+            *slot = normal;
+        }
+    }
+
+    /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the
+    /// cloth's).
+    pub fn friction_coefficient(&self, vertex: usize, obstacle: usize) -> f64 {
+        let cloth = self.friction.get(vertex).copied().unwrap_or(0.0);
+        self.obstacles
+            .get(obstacle)
+            .and_then(|o| o.friction)
+            .unwrap_or(cloth)
     }
 
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
@@ -523,6 +556,7 @@ impl CollisionStage {
             let x1r: &[Vec3] = x1;
             let v1r: &[Vec3] = v1;
             let held = &self.held;
+            let friction_solved = &self.friction_solved;
             self.scratch.clear();
             self.scratch.par_extend(
                 self.candidates
@@ -539,6 +573,7 @@ impl CollisionStage {
                             mode,
                             response,
                             held: held.get(i).copied().unwrap_or([(Vec3::ZERO, 0.0); 3]),
+                            friction_solved: friction_solved.get(i).copied().unwrap_or([Vec3::ZERO; 3]),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -594,6 +629,8 @@ impl CollisionStage {
             friction: &self.friction[..n],
             h,
             mode,
+            held: &self.held,
+            friction_solved: &self.friction_solved,
         };
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
@@ -632,6 +669,7 @@ impl CollisionStage {
         }
         self.feature_moved = moved;
         self.held.clear();
+        self.friction_solved.clear();
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,

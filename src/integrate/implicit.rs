@@ -14,6 +14,7 @@
 //! [`super::precond`]); its hierarchy is rebuilt only when the iteration count drifts up, and
 //! block Jacobi takes over whenever the hierarchy cannot be built.
 
+use super::friction::{self, Drag};
 use super::precond::{Csr, Multigrid};
 use super::{scratch, BlockCsr, Dynamics, Filter, Integrator, IntegratorStats, PatternBuilder};
 use crate::effects::{EffectSet, State};
@@ -48,6 +49,9 @@ pub enum Preconditioner {
 /// Rebuild the hierarchy at least this often (steps); sooner when the iteration count exceeds
 /// the one right after the last build by a quarter (plus two).
 const REBUILD_EVERY: u32 = 50;
+
+/// Solves at most with friction drags refitted to the sliding speed (see [`super::friction`]).
+const MAX_REFITS: u32 = 2;
 
 /// Newton iterations at most beyond Baraff and Witkin's one linearised solve.
 const MAX_NEWTON: u32 = 8;
@@ -228,6 +232,10 @@ pub struct Implicit {
     /// Storage for the filtered fine matrix handed to the multigrid.
     filtered: Csr,
     pcg: Pcg,
+    /// Friction drags of the current step's held vertices.
+    drags: Vec<Drag>,
+    /// Constraint impulses of the last step (see [`Integrator::constraint_impulses`]).
+    impulses: Vec<Vec3>,
     f0: Vec<Vec3>,
     b: Vec<Vec3>,
     dv: Vec<Vec3>,
@@ -257,6 +265,8 @@ impl Implicit {
             hierarchy: None,
             filtered: Csr::default(),
             pcg: Pcg::default(),
+            drags: Vec::new(),
+            impulses: Vec::new(),
             f0: Vec::new(),
             b: Vec::new(),
             dv: Vec::new(),
@@ -281,6 +291,7 @@ impl Implicit {
         d.effects.add_varying_jacobians(s, a, dfdv);
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
+        friction::add_to_matrix(a, &d.constraints.filter, &self.drags, h);
     }
 
     /// Baraff-Witkin's first step at `s`: `f0`, `b = h (f0 + h df/dx v0)` and `A`.
@@ -301,6 +312,58 @@ impl Implicit {
         }
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
+        // Friction drags: linear in v, so `A += h c S` and `b += h f_drag(v0)` are exact.
+        let filt = &d.constraints.filter;
+        self.drags.clear();
+        self.drags.extend(d.constraints.friction.iter().filter_map(|f| {
+            let i = f.vertex as usize;
+            (i < n)
+                .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i]))
+                .flatten()
+        }));
+        friction::add_to_matrix(a, filt, &self.drags, h);
+        for g in &self.drags {
+            self.b[g.vertex] += g.force(&filt[g.vertex], s.v[g.vertex]) * h;
+        }
+    }
+
+    /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
+    /// [`super::friction`]); returns whether any changed (the system then needs a new solve).
+    fn refit_drags(&mut self, filt: &[Filter], v0: &[Vec3], h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let mut changed = false;
+        for g in self.drags.iter_mut() {
+            let i = g.vertex;
+            let Some(mode) = g.refit(&filt[i], v0[i] + self.dv[i]) else {
+                continue;
+            };
+            let (old_force, old_damping) = (g.force(&filt[i], v0[i]), g.damping(&filt[i]));
+            g.mode = mode;
+            a.add(i as u32, i as u32, (g.damping(&filt[i]) - old_damping) * h);
+            self.b[i] += (g.force(&filt[i], v0[i]) - old_force) * h;
+            changed = true;
+        }
+        changed
+    }
+
+    /// The constraint impulses of the linear system just solved, `(I - S)(A dv - b)` (zero for
+    /// free vertices; none computed when no vertex is constrained).
+    fn linear_impulses(&mut self, filt: &[Filter]) {
+        let n = self.dv.len();
+        self.impulses.clear();
+        self.impulses.resize(n, Vec3::ZERO);
+        if filt.iter().all(|f| *f == Filter::Free) {
+            return;
+        }
+        let Some(a) = self.a.as_ref() else {
+            return;
+        };
+        a.mul(&self.dv, &mut self.impulses);
+        for i in 0..n {
+            self.impulses[i] = filt[i].constrained(self.impulses[i] - self.b[i]);
+        }
     }
 
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
@@ -359,6 +422,9 @@ impl Implicit {
             } else {
                 e.add_forces(&s, &mut self.b);
             }
+        }
+        for g in &self.drags {
+            self.b[g.vertex] += g.force(&filt[g.vertex], self.vk[g.vertex]);
         }
         let (mut ke0, mut ke1, mut w_other, mut w_constraint) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..self.f0.len() {
@@ -437,6 +503,14 @@ impl Integrator for Implicit {
         "implicit"
     }
 
+    fn solves_friction(&self) -> bool {
+        true
+    }
+
+    fn constraint_impulses(&self) -> Option<&[Vec3]> {
+        (!self.impulses.is_empty()).then_some(self.impulses.as_slice())
+    }
+
     fn prepare(&mut self, effects: &EffectSet, n: usize) {
         let mut p = PatternBuilder::new();
         effects.declare(&mut p);
@@ -480,6 +554,14 @@ impl Integrator for Implicit {
         }
         let mut stats = self.solve(filt);
         let mut cg_iterations = stats.iterations;
+        for _ in 0..MAX_REFITS {
+            if !self.refit_drags(filt, v, h) {
+                break;
+            }
+            stats = self.solve(filt);
+            cg_iterations += stats.iterations;
+        }
+        self.linear_impulses(filt);
 
         // Newton iterations on the nonlinear backward-Euler system, only while the step creates
         // energy (see `EnergyCheck`).
@@ -542,6 +624,13 @@ impl Integrator for Implicit {
             std::mem::swap(&mut self.dv, &mut self.delta);
         }
 
+        if newton > 0 {
+            // Newton's last residual `g = M dv - h f(x1, v1)` (in `b` as `-g`): converged, its
+            // constrained part is the reaction of the nonlinear system.
+            for i in 0..n {
+                self.impulses[i] = filt[i].constrained(-self.b[i]);
+            }
+        }
         for i in 0..n {
             v[i] += self.dv[i];
             x[i] += v[i] * h;

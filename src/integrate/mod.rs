@@ -7,12 +7,14 @@
 //! survey's "mass modification" `(I - p p^T)/m`.
 
 mod explicit;
+mod friction;
 mod implicit;
 mod precond;
 mod rk4;
 mod sparse;
 
 pub use explicit::{Euler, ExplicitEuler, SymplecticEuler};
+pub use friction::{Friction, STICK_SPEED};
 pub use implicit::{Implicit, ImplicitSettings};
 pub use rk4::Rk4;
 pub use sparse::{BlockCsr, PairSlots, PatternBuilder};
@@ -69,6 +71,9 @@ pub struct Constraints {
     pub filter: Vec<Filter>,
     /// Velocity the constrained components must have at the end of the step.
     pub target_velocity: Vec<Vec3>,
+    /// Coulomb friction of held vertices, for integrators that solve it (see
+    /// [`Integrator::solves_friction`]); the others leave friction to the collision stage.
+    pub friction: Vec<Friction>,
 }
 
 impl Constraints {
@@ -76,6 +81,7 @@ impl Constraints {
         Self {
             filter: vec![Filter::Free; n],
             target_velocity: vec![Vec3::ZERO; n],
+            friction: Vec::new(),
         }
     }
 }
@@ -156,6 +162,19 @@ pub trait Integrator: Send {
 
     /// Largest stable `h * omega` for an undamped oscillator, if the method has one.
     fn stability_limit(&self) -> Option<f64> {
+        None
+    }
+
+    /// Whether the step applies [`Constraints::friction`] itself (implicit: as a drag inside the
+    /// solve, see [`Friction`]).
+    fn solves_friction(&self) -> bool {
+        false
+    }
+
+    /// The impulse (N s) each vertex received from its constraint filter during the last step,
+    /// `(I - S)(M dv - h f)`, when the method knows it (implicit: from the system it solved, so
+    /// it holds no linearisation error). Entries of free vertices are zero.
+    fn constraint_impulses(&self) -> Option<&[Vec3]> {
         None
     }
 }

@@ -177,6 +177,9 @@ pub struct Simulation {
     obstacle_targets: Vec<Option<(Pose, Pose)>>,
     /// Upper bound of the cloth's highest angular frequency (rad/s), computed on first use.
     omega_bound: Option<f64>,
+    /// Per vertex, the normals the last substep's solve held it against with their Coulomb
+    /// limits `mu N` (N; 0: unused): the lagged normal forces of in-solve friction.
+    friction_limit: Vec<[(Vec3, f64); 3]>,
 }
 
 impl Simulation {
@@ -212,6 +215,7 @@ impl Simulation {
             collision: None,
             obstacle_targets: Vec::new(),
             omega_bound: None,
+            friction_limit: Vec::new(),
         }
     }
 
@@ -469,6 +473,7 @@ impl Simulation {
         } else {
             self.constraints.filter.fill(Filter::Free);
         }
+        self.constraints.friction.clear();
         for (i, k) in &self.cloth.kinematic {
             let (a, b) = (self.target(k, s0), self.target(k, s1));
             let i = *i as usize;
@@ -564,21 +569,49 @@ impl Simulation {
             // `f0 h / m`, overstate it up to 1e3 times for a vertex pressed by springs that the
             // implicit step relaxes: every held vertex then stuck, and friction's projection
             // back stretched the springs every step.)
+            // In-solve friction's Coulomb limits for the next substep: `mu N` of this solve's
+            // normal impulses (zero for vertices not held now).
+            self.friction_limit.clear();
+            self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
+            let solves_friction = self.integrator.solves_friction();
             if !held.is_empty() {
-                crate::integrate::scratch(&mut self.scratch_f, n);
-                let s = State {
-                    t: t + h,
-                    x: &self.cloth.x,
-                    v: &self.cloth.v,
-                };
-                self.effects.forces(&s, &mut self.scratch_f);
-                for (i, normals) in &held {
+                let impulses = self.integrator.constraint_impulses();
+                if impulses.is_none() {
+                    crate::integrate::scratch(&mut self.scratch_f, n);
+                    let s = State {
+                        t: t + h,
+                        x: &self.cloth.x,
+                        v: &self.cloth.v,
+                    };
+                    self.effects.forces(&s, &mut self.scratch_f);
+                }
+                for (i, normals, mu) in &held {
                     let i = *i;
-                    let dv = self.cloth.v[i]
-                        - self.v_save[i]
-                        - self.scratch_f[i] * (h / self.cloth.mass[i]);
-                    for (normal, dvn) in normals.normals().iter().zip(normals.split(dv)) {
+                    let m = self.cloth.mass[i];
+                    // The solver's own constraint impulse when it reports one: the estimate
+                    // below also holds the linearisation error of a stretched cloth's end-state
+                    // forces (up to 1e4 times the real normal force), and as friction's normal
+                    // force it made stretched cloth stick harder the more it was stretched.
+                    let dv = match impulses.and_then(|r| r.get(i)) {
+                        Some(r) => *r / m,
+                        None => self.cloth.v[i] - self.v_save[i] - self.scratch_f[i] * (h / m),
+                    };
+                    let split = normals.split(dv);
+                    for (normal, dvn) in normals.normals().iter().zip(split) {
                         stage.set_held(i, *normal, dvn);
+                    }
+                    if solves_friction {
+                        for (normal, surface) in normals.normals().iter().zip(normals.surfaces()) {
+                            if *surface == Vec3::ZERO {
+                                stage.set_friction_solved(i, *normal);
+                            }
+                        }
+                        for (slot, (normal, l)) in self.friction_limit[i]
+                            .iter_mut()
+                            .zip(normals.normals().iter().zip(split))
+                        {
+                            *slot = (*normal, mu * l.max(0.0) * m / h);
+                        }
                     }
                 }
             }
@@ -635,12 +668,48 @@ impl Simulation {
         h * omega > limit
     }
 
+    /// In-solve friction of vertex `i` held against `normals` (force `f` on it), one per surface:
+    /// each surface rubs with its own velocity (a cloth wedged between a moving hand and a
+    /// static torso is dragged by one and held by the other; one drag towards their mean
+    /// velocity with both limits summed dragged it at half the hand's speed with twice the
+    /// grip). The Coulomb limit is the last substep's `mu N` for that surface when the solve
+    /// held the vertex against it, else `mu` times the force pressing it into it now.
+    fn held_friction(
+        &self,
+        i: usize,
+        normals: &HeldNormals,
+        mu: f64,
+        f: Vec3,
+        out: &mut Vec<crate::integrate::Friction>,
+    ) {
+        let lagged = self.friction_limit.get(i).copied().unwrap_or_default();
+        for (n, surface) in normals.normals().iter().zip(normals.surfaces()) {
+            if *surface != Vec3::ZERO {
+                // A moving surface does work through friction, and under a kinematic squeeze
+                // its normal force is unbounded: its friction stays with the collision stage,
+                // bounded by the normal impulses there.
+                continue;
+            }
+            let limit = match lagged.iter().find(|l| l.1 > 0.0 && l.0.dot(*n) > 0.9) {
+                Some(l) => l.1,
+                None => mu * (-f.dot(*n)).max(0.0),
+            };
+            if limit > 0.0 {
+                out.push(crate::integrate::Friction {
+                    vertex: i as u32,
+                    limit,
+                    reference: *surface,
+                });
+            }
+        }
+    }
+
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
     /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact whose
     /// vertex is pulled away from the surface by the other forces is released instead of held.
     /// A vertex held by two or three surfaces keeps its velocity along all their normals (see
     /// [`HeldNormals`]). Returns the held vertices with their normals.
-    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals)> {
+    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals, f64)> {
         let mut held = Vec::new();
         let Some(stage) = self.collision.as_ref() else {
             return held;
@@ -657,23 +726,35 @@ impl Simulation {
         };
         self.effects.forces(&s, &mut self.scratch_f);
         // The contacts grouped by vertex (in contact order within a vertex).
-        let mut contacts: Vec<(usize, Vec3, Vec3)> = stage
+        let mut contacts: Vec<(usize, Vec3, Vec3, usize)> = stage
             .contacts()
             .iter()
-            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity))
-            .filter(|&(i, _, _)| i < n && self.constraints.filter[i] != Filter::Fixed)
+            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity, c.obstacle))
+            .filter(|&(i, _, _, _)| i < n && self.constraints.filter[i] != Filter::Fixed)
             .collect();
         contacts.sort_by_key(|c| c.0);
+        let solves_friction = self.integrator.solves_friction();
+        self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
+        let mut friction = Vec::new();
         for group in contacts.chunk_by(|a, b| a.0 == b.0) {
             let i = group[0].0;
-            let Some(normals) = pressing_normals(group, self.scratch_f[i]) else {
+            let f = self.scratch_f[i];
+            let Some(normals) = pressing_normals(group, f) else {
                 continue;
             };
             let (filter, target) = normals.filter();
             self.constraints.filter[i] = filter;
             self.constraints.target_velocity[i] = target;
-            held.push((i, normals));
+            let mu = group
+                .iter()
+                .map(|c| stage.friction_coefficient(i, c.3))
+                .fold(0.0, f64::max);
+            held.push((i, normals, mu));
+            if solves_friction {
+                self.held_friction(i, &normals, mu, f, &mut friction);
+            }
         }
+        self.constraints.friction = friction;
         held
     }
 
@@ -879,7 +960,7 @@ impl Simulation {
     }
 }
 
-/// The surfaces a vertex with the contacts `group` (vertex, normal, surface velocity) is held
+/// The surfaces a vertex with the contacts `group` (vertex, normal, surface velocity, obstacle) is held
 /// against this substep, given the force `f` on it, or `None` when it is released from all.
 ///
 /// A contact whose surface the force pulls the vertex off is released, but not alone: the
@@ -889,7 +970,7 @@ impl Simulation {
 /// solver drove it 9 mm through it in one substep and the collision stage's push back stored
 /// 0.7 J in the springs. So a released contact is taken back while the held ones' filtered
 /// force, or their surfaces' velocities, drive the vertex into its surface.
-fn pressing_normals(group: &[(usize, Vec3, Vec3)], f: Vec3) -> Option<HeldNormals> {
+fn pressing_normals(group: &[(usize, Vec3, Vec3, usize)], f: Vec3) -> Option<HeldNormals> {
     let mut held: Vec<bool> = group.iter().map(|c| f.dot(c.1) <= 0.0).collect();
     let build = |held: &[bool]| {
         HeldNormals::from_contacts(
