@@ -255,12 +255,23 @@ pub(crate) struct ClothState<'a> {
     pub friction: &'a [f64],
     pub h: f64,
     pub mode: DetectionMode,
-    /// Per vertex, the normals the implicit filter held it against this step with the normal
-    /// velocity change it applied (see `CollisionStage::set_held`; empty: none).
-    pub held: &'a [super::stage::Held],
     /// Per vertex, the normals whose friction the solver applied (empty: none).
     pub friction_solved: &'a [[Vec3; 3]],
 }
+
+/// The normal velocity change (`dvn`, m/s) a feature contact gave one of its vertices (weight at
+/// least [`FRICTION_WEIGHT`]), for the implicit solver's friction next substep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeatureFriction {
+    pub vertex: u32,
+    pub normal: Vec3,
+    pub surface_velocity: Vec3,
+    pub mu: f64,
+    pub dvn: f64,
+}
+
+/// Smallest barycentric weight of a vertex in a feature contact for it to rub on the feature.
+const FRICTION_WEIGHT: f64 = 0.25;
 
 /// Cloth topology and scratch buffers for feature contacts (kept across steps).
 #[derive(Debug, Default)]
@@ -281,6 +292,8 @@ pub(crate) struct FeatureCollider {
     dirty: Vec<bool>,
     /// Vertices moved by the current pass.
     moved: Vec<bool>,
+    /// Normal velocity changes of the last `resolve`'s contacts.
+    friction: Vec<FeatureFriction>,
 }
 
 impl FeatureCollider {
@@ -326,6 +339,7 @@ impl FeatureCollider {
             return 0;
         }
         let mut answered = 0;
+        self.friction.clear();
         for pass in 0..PASSES {
             self.detect(o, f, s, x1, pass > 0);
             if self.hits.is_empty() {
@@ -342,6 +356,7 @@ impl FeatureCollider {
                     s,
                     (x1, v1),
                     &mut self.moved,
+                    &mut self.friction,
                 );
                 answered += usize::from(r.is_some());
                 any |= r.unwrap_or(false);
@@ -355,6 +370,11 @@ impl FeatureCollider {
             }
         }
         answered
+    }
+
+    /// The normal velocity changes the last `resolve` gave (a vertex can appear several times).
+    pub fn friction(&self) -> &[FeatureFriction] {
+        &self.friction
     }
 
     /// Finds contacts over the step; with `only_dirty`, only on faces and edges with a vertex
@@ -566,6 +586,7 @@ fn respond(
     s: &ClothState,
     (x1, v1): (&mut [Vec3], &mut [Vec3]),
     touched: &mut [bool],
+    friction: &mut Vec<FeatureFriction>,
 ) -> Option<bool> {
     let idx = hit.verts.map(|v| v as usize);
     let im = idx.map(|i| s.inv_mass[i].max(0.0));
@@ -614,23 +635,27 @@ fn respond(
         }
         let rel = v1[idx[k]] - vs;
         let vn = rel.dot(n);
-        let held_here = s
-            .held
-            .get(idx[k])
-            .is_some_and(|h| h.iter().any(|(hn, dv)| *dv > 0.0 && hn.dot(n) > 0.9));
-        if vn >= 0.0 && !held_here {
+        if vn >= 0.0 {
             continue;
         }
         let i = idx[k];
-        let held = 0.0;
         let solved = s
             .friction_solved
             .get(i)
             .is_some_and(|fs| fs.iter().any(|sn| *sn != Vec3::ZERO && sn.dot(n) > 0.9));
-        let dvn = (-vn).max(0.0);
+        let dvn = -vn;
+        if hit.w[k] >= FRICTION_WEIGHT {
+            friction.push(FeatureFriction {
+                vertex: hit.verts[k],
+                normal: n,
+                surface_velocity: vs,
+                mu,
+                dvn,
+            });
+        }
         let vt = rel - n * vn;
         let vt_len = vt.length();
-        let mu_dvn = if solved { 0.0 } else { mu * (dvn + held) };
+        let mu_dvn = if solved { 0.0 } else { mu * dvn };
         let vt_new = if solved {
             vt
         } else if vt_len <= mu_dvn {

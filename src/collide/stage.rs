@@ -168,6 +168,8 @@ pub struct CollisionStage {
     /// Per vertex: the normals of held surfaces whose friction the solver applied (zero:
     /// unused; see `set_friction_solved`); used once by the next `resolve`.
     friction_solved: Vec<[Vec3; 3]>,
+    /// Normal velocity changes of the last `resolve`'s obstacle-feature contacts.
+    feature_friction: Vec<super::features::FeatureFriction>,
 }
 
 impl CollisionStage {
@@ -218,6 +220,7 @@ impl CollisionStage {
             feature_moved: Vec::new(),
             held: Vec::new(),
             friction_solved: Vec::new(),
+            feature_friction: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -333,6 +336,12 @@ impl CollisionStage {
         {
             *slot = normal;
         }
+    }
+
+    /// The normal velocity changes the last `resolve` gave vertices at obstacle edges and corners
+    /// (one entry per contact and vertex), for friction inside the implicit solve.
+    pub fn feature_friction(&self) -> &[super::features::FeatureFriction] {
+        &self.feature_friction
     }
 
     /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the
@@ -629,9 +638,9 @@ impl CollisionStage {
             friction: &self.friction[..n],
             h,
             mode,
-            held: &self.held,
             friction_solved: &self.friction_solved,
         };
+        self.feature_friction.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
         moved.resize(n, false);
@@ -645,6 +654,8 @@ impl CollisionStage {
             report.feature_contacts +=
                 self.feature_collider
                     .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
+            self.feature_friction
+                .extend_from_slice(self.feature_collider.friction());
         }
         // A pinched vertex cannot be `thickness` from both surfaces, so neither can the cloth
         // edges and faces around it be from the obstacles' edges: their feature contacts push it

@@ -44,6 +44,10 @@ pub struct Friction {
     pub vertex: u32,
     pub limit: f64,
     pub reference: Vec3,
+    /// The surface's normal when the filter does not hold the vertex against it (an obstacle
+    /// edge, which the bilateral filter must not hold: the cloth has to slide around it): the
+    /// drag then also leaves out this direction.
+    pub normal: Option<Vec3>,
 }
 
 /// How a vertex's friction acts during a step.
@@ -62,6 +66,9 @@ pub(crate) struct Drag {
     pub limit: f64,
     pub reference: Vec3,
     pub mode: Mode,
+    /// The directions the drag acts in: the filter's free ones `S`, or `S (I - n n^T) S` for a
+    /// surface the filter does not hold (symmetric positive semi-definite either way).
+    tangent: Mat3,
 }
 
 impl Drag {
@@ -76,13 +83,19 @@ impl Drag {
         if *filter == Filter::Fixed {
             return None;
         }
+        let s = filter.matrix();
+        let tangent = match f.normal {
+            Some(n) if n.is_finite() => s * (Mat3::IDENTITY - outer(n, n)) * s,
+            _ => s,
+        };
         let mut d = Self {
             vertex: f.vertex as usize,
             limit: f.limit,
             reference: f.reference,
             mode: Mode::Sticking { c: 0.0 },
+            tangent,
         };
-        let slip = filter.apply(v - f.reference);
+        let slip = d.slip(v);
         d.mode = Mode::Sticking {
             c: f.limit / slip.length().max(STICK_SPEED),
         };
@@ -90,6 +103,10 @@ impl Drag {
             d.mode = d.sliding(slip);
         }
         Some(d)
+    }
+
+    fn slip(&self, v: Vec3) -> Vec3 {
+        self.tangent * (v - self.reference)
     }
 
     fn sliding(&self, slip: Vec3) -> Mode {
@@ -101,8 +118,8 @@ impl Drag {
     }
 
     /// The force at velocity `v`.
-    pub fn force(&self, filter: &Filter, v: Vec3) -> Vec3 {
-        let slip = filter.apply(v - self.reference);
+    pub fn force(&self, v: Vec3) -> Vec3 {
+        let slip = self.slip(v);
         match self.mode {
             Mode::Sticking { c } => -slip * c,
             Mode::Sliding { direction, across } => {
@@ -112,17 +129,12 @@ impl Drag {
         }
     }
 
-    /// `-df/dv`, a symmetric positive semi-definite block in the filter's free directions.
-    pub fn damping(&self, filter: &Filter) -> Mat3 {
-        let s = filter.matrix();
+    /// `-df/dv`, a symmetric positive semi-definite block.
+    pub fn damping(&self) -> Mat3 {
         match self.mode {
-            Mode::Sticking { c } => s * c,
+            Mode::Sticking { c } => self.tangent * c,
             Mode::Sliding { direction, across } => {
-                (s - Mat3::from_cols(
-                    direction * direction.x,
-                    direction * direction.y,
-                    direction * direction.z,
-                )) * across
+                (self.tangent - outer(direction, direction)) * across
             }
         }
     }
@@ -130,8 +142,8 @@ impl Drag {
     /// The mode the iterate's velocity `v` calls for, when it differs: a slider that stopped
     /// (its slip reversed) sticks; a sticker whose drag exceeds [`OVERSHOOT`] times the limit
     /// slides in the direction it was pulled.
-    pub fn refit(&self, filter: &Filter, v: Vec3) -> Option<Mode> {
-        let slip = filter.apply(v - self.reference);
+    pub fn refit(&self, v: Vec3) -> Option<Mode> {
+        let slip = self.slip(v);
         match self.mode {
             Mode::Sliding { direction, .. } => (direction.dot(slip) <= 0.0).then_some(
                 Mode::Sticking {
@@ -145,10 +157,14 @@ impl Drag {
     }
 }
 
+fn outer(a: Vec3, b: Vec3) -> Mat3 {
+    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
 /// Adds `h (-df/dv)` of every drag to the diagonal blocks of `a`.
-pub(crate) fn add_to_matrix(a: &mut BlockCsr, filter: &[Filter], drags: &[Drag], h: f64) {
+pub(crate) fn add_to_matrix(a: &mut BlockCsr, drags: &[Drag], h: f64) {
     for d in drags {
         let i = d.vertex;
-        a.add(i as u32, i as u32, d.damping(&filter[i]) * h);
+        a.add(i as u32, i as u32, d.damping() * h);
     }
 }

@@ -291,7 +291,7 @@ impl Implicit {
         d.effects.add_varying_jacobians(s, a, dfdv);
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
-        friction::add_to_matrix(a, &d.constraints.filter, &self.drags, h);
+        friction::add_to_matrix(a, &self.drags, h);
     }
 
     /// Baraff-Witkin's first step at `s`: `f0`, `b = h (f0 + h df/dx v0)` and `A`.
@@ -321,28 +321,28 @@ impl Implicit {
                 .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i]))
                 .flatten()
         }));
-        friction::add_to_matrix(a, filt, &self.drags, h);
+        friction::add_to_matrix(a, &self.drags, h);
         for g in &self.drags {
-            self.b[g.vertex] += g.force(&filt[g.vertex], s.v[g.vertex]) * h;
+            self.b[g.vertex] += g.force(s.v[g.vertex]) * h;
         }
     }
 
     /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
     /// [`super::friction`]); returns whether any changed (the system then needs a new solve).
-    fn refit_drags(&mut self, filt: &[Filter], v0: &[Vec3], h: f64) -> bool {
+    fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
             return false;
         };
         let mut changed = false;
         for g in self.drags.iter_mut() {
             let i = g.vertex;
-            let Some(mode) = g.refit(&filt[i], v0[i] + self.dv[i]) else {
+            let Some(mode) = g.refit(v0[i] + self.dv[i]) else {
                 continue;
             };
-            let (old_force, old_damping) = (g.force(&filt[i], v0[i]), g.damping(&filt[i]));
+            let (old_force, old_damping) = (g.force(v0[i]), g.damping());
             g.mode = mode;
-            a.add(i as u32, i as u32, (g.damping(&filt[i]) - old_damping) * h);
-            self.b[i] += (g.force(&filt[i], v0[i]) - old_force) * h;
+            a.add(i as u32, i as u32, (g.damping() - old_damping) * h);
+            self.b[i] += (g.force(v0[i]) - old_force) * h;
             changed = true;
         }
         changed
@@ -424,7 +424,7 @@ impl Implicit {
             }
         }
         for g in &self.drags {
-            self.b[g.vertex] += g.force(&filt[g.vertex], self.vk[g.vertex]);
+            self.b[g.vertex] += g.force(self.vk[g.vertex]);
         }
         let (mut ke0, mut ke1, mut w_other, mut w_constraint) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..self.f0.len() {
@@ -555,7 +555,7 @@ impl Integrator for Implicit {
         let mut stats = self.solve(filt);
         let mut cg_iterations = stats.iterations;
         for _ in 0..MAX_REFITS {
-            if !self.refit_drags(filt, v, h) {
+            if !self.refit_drags(v, h) {
                 break;
             }
             stats = self.solve(filt);

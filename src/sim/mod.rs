@@ -482,7 +482,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        let held = self.contact_constraints(t);
+        let held = self.contact_constraints(t, h);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -574,6 +574,11 @@ impl Simulation {
             self.friction_limit.clear();
             self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
             let solves_friction = self.integrator.solves_friction();
+            for f in &self.constraints.friction {
+                if let Some(normal) = f.normal {
+                    stage.set_friction_solved(f.vertex as usize, normal);
+                }
+            }
             if !held.is_empty() {
                 let impulses = self.integrator.constraint_impulses();
                 if impulses.is_none() {
@@ -699,6 +704,55 @@ impl Simulation {
                     vertex: i as u32,
                     limit,
                     reference: *surface,
+                    normal: None,
+                });
+            }
+        }
+    }
+
+    /// In-solve friction of vertices that rubbed on a static obstacle's edge or corner in the
+    /// last collision pass: the limit is `mu` times the normal force the edge gave them then
+    /// (`m dvn / h`); the drag leaves out the edge's normal (the filter does not hold them
+    /// there: a bilateral hold would stop the cloth sliding around the edge). Post-solve edge
+    /// friction, decided per vertex from velocities the solver produced while the neighbours
+    /// were held, stuck a strip that Coulomb lets slide off a table (tests/table_edge.rs).
+    fn feature_friction(
+        &self,
+        contacts: &[crate::collide::FeatureFriction],
+        h: f64,
+        out: &mut Vec<crate::integrate::Friction>,
+    ) {
+        let n = self.cloth.len();
+        let mut rubbing: Vec<&crate::collide::FeatureFriction> = contacts
+            .iter()
+            .filter(|c| {
+                let i = c.vertex as usize;
+                i < n
+                    && c.surface_velocity == Vec3::ZERO
+                    && c.dvn > 0.0
+                    && c.mu > 0.0
+                    && self.constraints.filter[i] != Filter::Fixed
+            })
+            .collect();
+        rubbing.sort_by_key(|c| c.vertex);
+        for group in rubbing.chunk_by(|a, b| a.vertex == b.vertex) {
+            // One drag per edge normal: repeated contacts (several passes, faces and edges around
+            // the vertex) with the same normal count once, with their largest push.
+            let mut kept: Vec<(Vec3, f64)> = Vec::new();
+            for c in group {
+                let f = c.mu * c.dvn;
+                match kept.iter_mut().find(|k| k.0.dot(c.normal) > 0.99) {
+                    Some(k) => k.1 = k.1.max(f),
+                    None => kept.push((c.normal, f)),
+                }
+            }
+            let i = group[0].vertex as usize;
+            for (normal, mu_dvn) in kept {
+                out.push(crate::integrate::Friction {
+                    vertex: i as u32,
+                    limit: mu_dvn * self.cloth.mass[i] / h,
+                    reference: Vec3::ZERO,
+                    normal: Some(normal),
                 });
             }
         }
@@ -709,7 +763,7 @@ impl Simulation {
     /// vertex is pulled away from the surface by the other forces is released instead of held.
     /// A vertex held by two or three surfaces keeps its velocity along all their normals (see
     /// [`HeldNormals`]). Returns the held vertices with their normals.
-    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals, f64)> {
+    fn contact_constraints(&mut self, t: f64, h: f64) -> Vec<(usize, HeldNormals, f64)> {
         let mut held = Vec::new();
         let Some(stage) = self.collision.as_ref() else {
             return held;
@@ -753,6 +807,9 @@ impl Simulation {
             if solves_friction {
                 self.held_friction(i, &normals, mu, f, &mut friction);
             }
+        }
+        if solves_friction {
+            self.feature_friction(stage.feature_friction(), h, &mut friction);
         }
         self.constraints.friction = friction;
         held
