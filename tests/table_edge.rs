@@ -11,8 +11,10 @@ use drape::scene::Scene;
 const L: f64 = 1.0;
 const MU: f64 = 0.2;
 
-/// How far the strip's far end (on the table) moved towards the edge after `seconds` (m).
-fn strip(hanging: f64, mu: f64, seconds: f64) -> f64 {
+/// How far the strip's far end (on the table) moved towards the edge after `seconds` (m), and the
+/// farthest it got on the way (m): once the far end passes the edge the strip has left the table
+/// (it then falls and swings back under the edge).
+fn strip(hanging: f64, mu: f64, seconds: f64) -> (f64, f64) {
     let th = 0.004;
     let yaml = format!(
         r#"
@@ -49,37 +51,57 @@ collision: {{ mode: continuous }}
             .fold(f64::INFINITY, f64::min)
     };
     let start = far_end(&sim);
+    let mut farthest: f64 = 0.0;
     for _ in 0..(seconds / sim.settings.dt).round() as usize {
         sim.step().unwrap_or_else(|e| panic!("{e}"));
+        farthest = farthest.max(far_end(&sim) - start);
     }
-    far_end(&sim) - start
+    (far_end(&sim) - start, farthest)
+}
+
+/// The far end's start distance from the edge (m) for `hanging` of the strip over it.
+fn on_table(hanging: f64) -> f64 {
+    L - hanging
 }
 
 /// 12 % hanging: `0.12 < mu (L - l) = 0.176`, so even a frictionless edge holds it. It may
 /// shift while the hanging part falls and swings (a few mm), never slide.
 #[test]
 fn a_strip_with_little_hanging_stays_on_the_table() {
-    let moved = strip(0.12, MU, 2.0);
+    let (moved, _) = strip(0.12, MU, 2.0);
     assert!(moved.abs() < 0.01, "moved {moved:.4} m");
 }
 
 /// Without friction anything hanging pulls the strip off: the sharp edge's geometric response
-/// alone must not hold it (30 % hanging, 2 s: the far end travels most of the table part).
+/// alone must not hold it. This checks the verdict (the far end passes the edge: the strip left
+/// the table), not the speed: an ideal string hanging 30 % would be off in 0.6 s
+/// (`l = 0.3 cosh(sqrt(g / L) t)`), ~1 s with the fall of the part that starts level with the
+/// table; measured 2.5 s (the README's known limits: 2.5 cm segments over a 4 mm thick wrap
+/// slide in jerks, and backward Euler at 120 Hz damps the swing).
 #[test]
 fn a_frictionless_strip_slides_off_the_table() {
-    let moved = strip(0.3, 0.0, 2.0);
-    assert!(moved > 0.5, "moved {moved:.4} m");
+    let (_, farthest) = strip(0.3, 0.0, 3.5);
+    assert!(
+        farthest > on_table(0.3),
+        "far end got {farthest:.4} m of {:.2} m",
+        on_table(0.3)
+    );
 }
 
 /// 45 % hanging at mu 0.2: pull `0.45 exp(-0.1 pi) = 0.33` against `mu (L - l) = 0.11`, so the
 /// strip accelerates at about `g (0.33 - 0.11) / L = 2 m/s^2` and is off the table in ~1 s.
-/// Known gap (issue 7): it stops after ~7 cm. The friction of the edge's feature contacts is
-/// decided per vertex and substep from velocities the solver produced while the neighbours
-/// were held, so the coupled strip sticks at the edge (the in-solve friction on branch `land`
-/// makes the table top exact, see tests/friction_implicit.rs there, but not the edge).
+/// Known gap (issue 7): it sticks for seconds at the edge (4 cm in, for 2 s; it then creeps and
+/// leaves after 3-4 s, chaotically). Measured cause: the 2.5 cm segment over the edge is a
+/// lever whose tip (the strip's bend, a vertex at least the 4 mm thickness beyond the edge)
+/// carries the hanging part; a string bent at the edge itself has no such lever. Finer strips
+/// (6 mm segments) creep too, so resolution alone does not remove it.
 #[test]
-#[ignore = "known gap (issue 7): friction at sharp obstacle edges holds a strip Coulomb lets slide"]
+#[ignore = "known gap (issue 7): a coarse strip bent over a sharp edge sticks where Coulomb lets it slide"]
 fn a_strip_with_a_heavy_hanging_part_slides_off_the_table() {
-    let moved = strip(0.45, MU, 2.0);
-    assert!(moved > 0.5, "moved {moved:.4} m");
+    let (_, farthest) = strip(0.45, MU, 2.0);
+    assert!(
+        farthest > on_table(0.45),
+        "far end got {farthest:.4} m of {:.2} m",
+        on_table(0.45)
+    );
 }

@@ -257,21 +257,33 @@ pub(crate) struct ClothState<'a> {
     pub mode: DetectionMode,
     /// Per vertex, the normals whose friction the solver applied (empty: none).
     pub friction_solved: &'a [[Vec3; 3]],
+    /// The cloth faces and edges the solver held with an edge spring this step (sorted).
+    pub sprung: &'a [[u32; 3]],
 }
 
-/// The normal velocity change (`dvn`, m/s) a feature contact gave one of its vertices (weight at
-/// least [`FRICTION_WEIGHT`]), for the implicit solver's friction next substep.
+/// A contact of a static obstacle's edge or corner with the cloth, for the implicit solver to
+/// hold as a one-sided spring next substep (see [`crate::integrate::ContactSpring`]): the cloth
+/// point `sum weights_k x_k` stays `gap` in front of `point` along `normal`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FeatureFriction {
-    pub vertex: u32,
+pub struct FeatureContact {
+    pub verts: [u32; 3],
+    pub weights: [f64; 3],
+    /// World unit normal from the feature towards the cloth.
     pub normal: Vec3,
-    pub surface_velocity: Vec3,
+    /// The feature's contact point (world).
+    pub point: Vec3,
+    /// Contact distance `radius + thickness` (m).
+    pub gap: f64,
     pub mu: f64,
-    pub dvn: f64,
 }
 
-/// Smallest barycentric weight of a vertex in a feature contact for it to rub on the feature.
-const FRICTION_WEIGHT: f64 = 0.25;
+/// A contact the solver held as a spring is answered here only once the cloth point is deeper
+/// than this fraction of the contact distance into it (a safety net: the spring's deflection
+/// under load is micrometres). Above it, a push by position would stretch the cloth over the
+/// edge: the solver moves the segment's vertices with their neighbours and the push moves only
+/// them back, and that spurious tension's normal force gripped a strip the hanging weight pulls
+/// off a table 50 times more than its weight (tests/table_edge.rs).
+const DEEP: f64 = 0.5;
 
 /// Cloth topology and scratch buffers for feature contacts (kept across steps).
 #[derive(Debug, Default)]
@@ -292,8 +304,8 @@ pub(crate) struct FeatureCollider {
     dirty: Vec<bool>,
     /// Vertices moved by the current pass.
     moved: Vec<bool>,
-    /// Normal velocity changes of the last `resolve`'s contacts.
-    friction: Vec<FeatureFriction>,
+    /// Contacts of the last `resolve` with static obstacles.
+    contacts: Vec<FeatureContact>,
 }
 
 impl FeatureCollider {
@@ -339,7 +351,7 @@ impl FeatureCollider {
             return 0;
         }
         let mut answered = 0;
-        self.friction.clear();
+        self.contacts.clear();
         for pass in 0..PASSES {
             self.detect(o, f, s, x1, pass > 0);
             if self.hits.is_empty() {
@@ -356,7 +368,7 @@ impl FeatureCollider {
                     s,
                     (x1, v1),
                     &mut self.moved,
-                    &mut self.friction,
+                    &mut self.contacts,
                 );
                 answered += usize::from(r.is_some());
                 any |= r.unwrap_or(false);
@@ -372,9 +384,10 @@ impl FeatureCollider {
         answered
     }
 
-    /// The normal velocity changes the last `resolve` gave (a vertex can appear several times).
-    pub fn friction(&self) -> &[FeatureFriction] {
-        &self.friction
+    /// The last `resolve`'s contacts with static obstacles (one per cloth face or edge and
+    /// feature; earlier passes first).
+    pub fn contacts(&self) -> &[FeatureContact] {
+        &self.contacts
     }
 
     /// Finds contacts over the step; with `only_dirty`, only on faces and edges with a vertex
@@ -586,7 +599,7 @@ fn respond(
     s: &ClothState,
     (x1, v1): (&mut [Vec3], &mut [Vec3]),
     touched: &mut [bool],
-    friction: &mut Vec<FeatureFriction>,
+    contacts: &mut Vec<FeatureContact>,
 ) -> Option<bool> {
     let idx = hit.verts.map(|v| v as usize);
     let im = idx.map(|i| s.inv_mass[i].max(0.0));
@@ -606,6 +619,22 @@ fn respond(
     };
     let c: Vec3 = (0..3).map(|k| x1[idx[k]] * hit.w[k]).sum();
     let gap = n.dot(c - f_end);
+    let mu = o
+        .friction
+        .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
+    if o.pose_prev == o.pose {
+        contacts.push(FeatureContact {
+            verts: hit.verts,
+            weights: hit.w,
+            normal: n,
+            point: f_end,
+            gap: eta,
+            mu,
+        });
+        if s.sprung.binary_search(&hit.verts).is_ok() && gap >= DEEP * eta {
+            return Some(false);
+        }
+    }
     let target = eta * (1.0 + PUSH_SLACK);
     let mut moved = false;
     if gap < eta {
@@ -618,9 +647,6 @@ fn respond(
         }
         moved = true;
     }
-    let mu = o
-        .friction
-        .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
     // Velocities per vertex, not through `c`: several cloth edges and faces around one vertex
     // touch the same feature at once (a strap over a box edge: the edge along the strap and the
     // diagonal), and distributing each contact's impulse over its vertices in turn over-corrects
@@ -644,15 +670,6 @@ fn respond(
             .get(i)
             .is_some_and(|fs| fs.iter().any(|sn| *sn != Vec3::ZERO && sn.dot(n) > 0.9));
         let dvn = -vn;
-        if hit.w[k] >= FRICTION_WEIGHT {
-            friction.push(FeatureFriction {
-                vertex: hit.verts[k],
-                normal: n,
-                surface_velocity: vs,
-                mu,
-                dvn,
-            });
-        }
         let vt = rel - n * vn;
         let vt_len = vt.length();
         let mu_dvn = if solved { 0.0 } else { mu * dvn };

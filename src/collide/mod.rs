@@ -13,7 +13,7 @@ mod self_contact;
 pub mod spec;
 pub mod stage;
 
-pub use features::FeatureFriction;
+pub use features::FeatureContact;
 pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};

@@ -168,8 +168,11 @@ pub struct CollisionStage {
     /// Per vertex: the normals of held surfaces whose friction the solver applied (zero:
     /// unused; see `set_friction_solved`); used once by the next `resolve`.
     friction_solved: Vec<[Vec3; 3]>,
-    /// Normal velocity changes of the last `resolve`'s obstacle-feature contacts.
-    feature_friction: Vec<super::features::FeatureFriction>,
+    /// The last `resolve`'s contacts of static obstacles' edges and corners.
+    feature_contacts: Vec<super::features::FeatureContact>,
+    /// The cloth faces and edges (`verts` of [`super::FeatureContact`]) the solver held with
+    /// an edge spring this step, sorted; see `set_sprung`. Used once by the next `resolve`.
+    sprung: Vec<[u32; 3]>,
 }
 
 impl CollisionStage {
@@ -220,7 +223,8 @@ impl CollisionStage {
             feature_moved: Vec::new(),
             held: Vec::new(),
             friction_solved: Vec::new(),
-            feature_friction: Vec::new(),
+            feature_contacts: Vec::new(),
+            sprung: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -328,7 +332,8 @@ impl CollisionStage {
         }
         if self.friction_solved.len() != self.n_vertices {
             self.friction_solved.clear();
-            self.friction_solved.resize(self.n_vertices, [Vec3::ZERO; 3]);
+            self.friction_solved
+                .resize(self.n_vertices, [Vec3::ZERO; 3]);
         }
         if let Some(slot) = self.friction_solved[vertex]
             .iter_mut()
@@ -338,10 +343,20 @@ impl CollisionStage {
         }
     }
 
-    /// The normal velocity changes the last `resolve` gave vertices at obstacle edges and corners
-    /// (one entry per contact and vertex), for friction inside the implicit solve.
-    pub fn feature_friction(&self) -> &[super::features::FeatureFriction] {
-        &self.feature_friction
+    /// The last `resolve`'s contacts of static obstacles' edges and corners with cloth faces and
+    /// edges, for the implicit solver to hold as springs next substep.
+    pub fn feature_contacts(&self) -> &[super::features::FeatureContact] {
+        &self.feature_contacts
+    }
+
+    /// Records which feature contacts (their cloth faces and edges, `verts` of
+    /// [`super::FeatureContact`]) the solver held with edge springs this step: the next `resolve`
+    /// leaves those to the solver unless they end deep (see `features::DEEP`).
+    pub fn set_sprung(&mut self, contacts: impl IntoIterator<Item = [u32; 3]>) {
+        self.sprung.clear();
+        self.sprung.extend(contacts);
+        self.sprung.sort_unstable();
+        self.sprung.dedup();
     }
 
     /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the
@@ -582,7 +597,10 @@ impl CollisionStage {
                             mode,
                             response,
                             held: held.get(i).copied().unwrap_or([(Vec3::ZERO, 0.0); 3]),
-                            friction_solved: friction_solved.get(i).copied().unwrap_or([Vec3::ZERO; 3]),
+                            friction_solved: friction_solved
+                                .get(i)
+                                .copied()
+                                .unwrap_or([Vec3::ZERO; 3]),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -639,8 +657,9 @@ impl CollisionStage {
             h,
             mode,
             friction_solved: &self.friction_solved,
+            sprung: &self.sprung,
         };
-        self.feature_friction.clear();
+        self.feature_contacts.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
         moved.resize(n, false);
@@ -654,8 +673,8 @@ impl CollisionStage {
             report.feature_contacts +=
                 self.feature_collider
                     .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
-            self.feature_friction
-                .extend_from_slice(self.feature_collider.friction());
+            self.feature_contacts
+                .extend_from_slice(self.feature_collider.contacts());
         }
         // A pinched vertex cannot be `thickness` from both surfaces, so neither can the cloth
         // edges and faces around it be from the obstacles' edges: their feature contacts push it
@@ -681,6 +700,7 @@ impl CollisionStage {
         self.feature_moved = moved;
         self.held.clear();
         self.friction_solved.clear();
+        self.sprung.clear();
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,

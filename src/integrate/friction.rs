@@ -145,11 +145,11 @@ impl Drag {
     pub fn refit(&self, v: Vec3) -> Option<Mode> {
         let slip = self.slip(v);
         match self.mode {
-            Mode::Sliding { direction, .. } => (direction.dot(slip) <= 0.0).then_some(
-                Mode::Sticking {
+            Mode::Sliding { direction, .. } => {
+                (direction.dot(slip) <= 0.0).then_some(Mode::Sticking {
                     c: self.limit / STICK_SPEED,
-                },
-            ),
+                })
+            }
             Mode::Sticking { c } => (c * slip.length() > OVERSHOOT * self.limit
                 && slip.length() > 0.0)
                 .then(|| self.sliding(slip)),

@@ -14,6 +14,7 @@
 //! [`super::precond`]); its hierarchy is rebuilt only when the iteration count drifts up, and
 //! block Jacobi takes over whenever the hierarchy cannot be built.
 
+use super::contact::ContactSpring;
 use super::friction::{self, Drag};
 use super::precond::{Csr, Multigrid};
 use super::{scratch, BlockCsr, Dynamics, Filter, Integrator, IntegratorStats, PatternBuilder};
@@ -234,6 +235,10 @@ pub struct Implicit {
     pcg: Pcg,
     /// Friction drags of the current step's held vertices.
     drags: Vec<Drag>,
+    /// Per edge spring of the step's constraints: whether it acts in the current system.
+    spring_active: Vec<bool>,
+    /// Per edge spring: its force at the end of the last step (N).
+    spring_forces: Vec<f64>,
     /// Constraint impulses of the last step (see [`Integrator::constraint_impulses`]).
     impulses: Vec<Vec3>,
     f0: Vec<Vec3>,
@@ -266,6 +271,8 @@ impl Implicit {
             filtered: Csr::default(),
             pcg: Pcg::default(),
             drags: Vec::new(),
+            spring_active: Vec::new(),
+            spring_forces: Vec::new(),
             impulses: Vec::new(),
             f0: Vec::new(),
             b: Vec::new(),
@@ -292,6 +299,12 @@ impl Implicit {
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
         friction::add_to_matrix(a, &self.drags, h);
+        let n = s.x.len();
+        for c in &d.constraints.contacts {
+            if c.is_valid(n) && c.depth(s.x) > 0.0 {
+                c.add_jacobian(a, h * h);
+            }
+        }
     }
 
     /// Baraff-Witkin's first step at `s`: `f0`, `b = h (f0 + h df/dx v0)` and `A`.
@@ -315,16 +328,54 @@ impl Implicit {
         // Friction drags: linear in v, so `A += h c S` and `b += h f_drag(v0)` are exact.
         let filt = &d.constraints.filter;
         self.drags.clear();
-        self.drags.extend(d.constraints.friction.iter().filter_map(|f| {
-            let i = f.vertex as usize;
-            (i < n)
-                .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i]))
-                .flatten()
-        }));
+        self.drags
+            .extend(d.constraints.friction.iter().filter_map(|f| {
+                let i = f.vertex as usize;
+                (i < n)
+                    .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i]))
+                    .flatten()
+            }));
         friction::add_to_matrix(a, &self.drags, h);
         for g in &self.drags {
             self.b[g.vertex] += g.force(s.v[g.vertex]) * h;
         }
+        // Edge springs the cloth is in or heading into.
+        self.spring_active.clear();
+        for c in &d.constraints.contacts {
+            let active = c.is_valid(n) && (c.depth(s.x) > 0.0 || c.depth_after(s.x, s.v, h) > 0.0);
+            if active {
+                spring_terms(c, a, &mut self.b, s, h, 1.0);
+            }
+            self.spring_active.push(active);
+        }
+    }
+
+    /// Adds (`sign` 1) or removes (-1) edge springs so that exactly those whose cloth point ends
+    /// the solved step inside their layer act (see [`super::contact`]); returns whether any
+    /// changed (the system then needs a new solve).
+    fn refit_springs(&mut self, d: &Dynamics, s: &State, h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let n = s.x.len();
+        let mut changed = false;
+        for (c, active) in d
+            .constraints
+            .contacts
+            .iter()
+            .zip(self.spring_active.iter_mut())
+        {
+            if !c.is_valid(n) {
+                continue;
+            }
+            let wanted = c.depth_after(s.x, s.v, h) - h * c.along(&self.dv) > 0.0;
+            if wanted != *active {
+                spring_terms(c, a, &mut self.b, s, h, if wanted { 1.0 } else { -1.0 });
+                *active = wanted;
+                changed = true;
+            }
+        }
+        changed
     }
 
     /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
@@ -426,6 +477,12 @@ impl Implicit {
         for g in &self.drags {
             self.b[g.vertex] += g.force(self.vk[g.vertex]);
         }
+        // Edge springs count as outside work (their energy is not in the potential).
+        for c in &d.constraints.contacts {
+            if c.is_valid(self.xk.len()) {
+                c.add_force(c.depth(&self.xk).max(0.0), 1.0, &mut self.b);
+            }
+        }
         let (mut ke0, mut ke1, mut w_other, mut w_constraint) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..self.f0.len() {
             let (m, v1) = (d.mass[i], self.vk[i]);
@@ -494,6 +551,14 @@ impl Implicit {
     }
 }
 
+/// Backward Euler's terms of edge spring `c` linearised at the start state `s`, times `sign`:
+/// `A += h^2 k J` and `b += h (f(x0) + h df/dx v0)` (see [`super::contact`]).
+fn spring_terms(c: &ContactSpring, a: &mut BlockCsr, b: &mut [Vec3], s: &State, h: f64, sign: f64) {
+    c.add_jacobian(a, sign * h * h);
+    c.add_force(c.depth(s.x), sign * h, b);
+    c.add_jacobian_product(a, s.v, -sign * h * h, b);
+}
+
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
 }
@@ -501,6 +566,14 @@ fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
 impl Integrator for Implicit {
     fn name(&self) -> &'static str {
         "implicit"
+    }
+
+    fn solves_contacts(&self) -> bool {
+        true
+    }
+
+    fn contact_forces(&self) -> Option<&[f64]> {
+        Some(&self.spring_forces)
     }
 
     fn solves_friction(&self) -> bool {
@@ -555,7 +628,9 @@ impl Integrator for Implicit {
         let mut stats = self.solve(filt);
         let mut cg_iterations = stats.iterations;
         for _ in 0..MAX_REFITS {
-            if !self.refit_drags(v, h) {
+            let drags = self.refit_drags(v, h);
+            let springs = self.refit_springs(d, &State { t, x, v }, h);
+            if !(drags || springs) {
                 break;
             }
             stats = self.solve(filt);
@@ -635,6 +710,15 @@ impl Integrator for Implicit {
             v[i] += self.dv[i];
             x[i] += v[i] * h;
         }
+        self.spring_forces.clear();
+        self.spring_forces
+            .extend(d.constraints.contacts.iter().map(|c| {
+                if c.is_valid(n) {
+                    c.force(x)
+                } else {
+                    0.0
+                }
+            }));
         IntegratorStats {
             force_evaluations: 2 + newton,
             cg_iterations,

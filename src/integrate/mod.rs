@@ -6,6 +6,7 @@
 //! filter accelerations; the implicit method filters its conjugate-gradient iterates, which is the
 //! survey's "mass modification" `(I - p p^T)/m`.
 
+mod contact;
 mod explicit;
 mod friction;
 mod implicit;
@@ -13,6 +14,7 @@ mod precond;
 mod rk4;
 mod sparse;
 
+pub use contact::ContactSpring;
 pub use explicit::{Euler, ExplicitEuler, SymplecticEuler};
 pub use friction::{Friction, STICK_SPEED};
 pub use implicit::{Implicit, ImplicitSettings};
@@ -74,6 +76,9 @@ pub struct Constraints {
     /// Coulomb friction of held vertices, for integrators that solve it (see
     /// [`Integrator::solves_friction`]); the others leave friction to the collision stage.
     pub friction: Vec<Friction>,
+    /// Static obstacle edges and corners against the cloth, for integrators that solve them
+    /// (see [`Integrator::solves_contacts`]); the others leave them to the collision stage.
+    pub contacts: Vec<ContactSpring>,
 }
 
 impl Constraints {
@@ -82,6 +87,7 @@ impl Constraints {
             filter: vec![Filter::Free; n],
             target_velocity: vec![Vec3::ZERO; n],
             friction: Vec::new(),
+            contacts: Vec::new(),
         }
     }
 }
@@ -168,6 +174,18 @@ pub trait Integrator: Send {
     /// Whether the step applies [`Constraints::friction`] itself (implicit: as a drag inside the
     /// solve, see [`Friction`]).
     fn solves_friction(&self) -> bool {
+        false
+    }
+
+    /// The normal force (N) each of [`Constraints::contacts`] exerted at the end of the last
+    /// step, in their order (`None` when the integrator does not solve them).
+    fn contact_forces(&self) -> Option<&[f64]> {
+        None
+    }
+
+    /// Whether the step applies [`Constraints::contacts`] itself (implicit: as one-sided
+    /// springs inside the solve, see [`ContactSpring`]).
+    fn solves_contacts(&self) -> bool {
         false
     }
 

@@ -116,6 +116,19 @@ impl BlockCsr {
         }
     }
 
+    /// Index of block (i, j) in the value array, `None` when the pair is not in the pattern.
+    #[inline]
+    pub fn try_slot(&self, i: u32, j: u32) -> Option<usize> {
+        if i == j {
+            return self.diag.get(i as usize).copied();
+        }
+        let (s, e) = (
+            *self.row_start.get(i as usize)?,
+            *self.row_start.get(i as usize + 1)?,
+        );
+        self.cols[s..e].binary_search(&j).ok().map(|k| s + k)
+    }
+
     #[inline]
     pub fn add(&mut self, i: u32, j: u32, m: Mat3) {
         let s = self.slot(i, j);

@@ -180,6 +180,8 @@ pub struct Simulation {
     /// Per vertex, the normals the last substep's solve held it against with their Coulomb
     /// limits `mu N` (N; 0: unused): the lagged normal forces of in-solve friction.
     friction_limit: Vec<[(Vec3, f64); 3]>,
+    /// The last substep's edge springs (cloth face or edge) and their end forces (N), sorted.
+    spring_forces: Vec<([u32; 3], f64)>,
 }
 
 impl Simulation {
@@ -216,6 +218,7 @@ impl Simulation {
             obstacle_targets: Vec::new(),
             omega_bound: None,
             friction_limit: Vec::new(),
+            spring_forces: Vec::new(),
         }
     }
 
@@ -482,7 +485,8 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        let held = self.contact_constraints(t, h);
+        self.edge_springs(h);
+        let held = self.contact_constraints(t);
         let e0 = match self.energy_cache {
             Some(e) => e,
             None => self.energies(),
@@ -507,6 +511,18 @@ impl Simulation {
             self.integrator
                 .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
         };
+        // Edge springs' end forces, the normal forces of their friction next substep.
+        self.spring_forces.clear();
+        if let Some(forces) = self.integrator.contact_forces() {
+            self.spring_forces.extend(
+                self.constraints
+                    .contacts
+                    .iter()
+                    .zip(forces)
+                    .map(|(c, f)| (c.verts, *f)),
+            );
+            self.spring_forces.sort_by_key(|a| a.0);
+        }
         m.force_evaluations += stats.force_evaluations;
         m.cg_iterations += stats.cg_iterations;
         m.cg_residual_max = m.cg_residual_max.max(stats.cg_residual);
@@ -661,16 +677,7 @@ impl Simulation {
         let Some(limit) = self.integrator.stability_limit().filter(|l| *l > 0.0) else {
             return false;
         };
-        let omega = *self.omega_bound.get_or_insert_with(|| {
-            let sum: f64 = self
-                .effects
-                .stiffness(&self.cloth.mass)
-                .iter()
-                .map(|b| b.omega_sq)
-                .sum();
-            sum.sqrt()
-        });
-        h * omega > limit
+        h * self.omega_bound() > limit
     }
 
     /// In-solve friction of vertex `i` held against `normals` (force `f` on it), one per surface:
@@ -710,52 +717,90 @@ impl Simulation {
         }
     }
 
-    /// In-solve friction of vertices that rubbed on a static obstacle's edge or corner in the
-    /// last collision pass: the limit is `mu` times the normal force the edge gave them then
-    /// (`m dvn / h`); the drag leaves out the edge's normal (the filter does not hold them
-    /// there: a bilateral hold would stop the cloth sliding around the edge). Post-solve edge
-    /// friction, decided per vertex from velocities the solver produced while the neighbours
-    /// were held, stuck a strip that Coulomb lets slide off a table (tests/table_edge.rs).
-    fn feature_friction(
-        &self,
-        contacts: &[crate::collide::FeatureFriction],
-        h: f64,
-        out: &mut Vec<crate::integrate::Friction>,
-    ) {
+    /// Static obstacle edges and corners the cloth touched in the last collision pass become
+    /// one-sided springs of this substep when the integrator solves them (see
+    /// [`crate::integrate::ContactSpring`]), with in-solve Coulomb friction whose limit is `mu`
+    /// times the force the same contact's spring ended the last substep with, shared by
+    /// weight. The stage then leaves those contacts to the solver unless they end deep.
+    fn edge_springs(&mut self, h: f64) {
+        /// `k h^2 / m` of an edge spring at the contact point's mass `m`: the spring stops the
+        /// point within a step, and a load of the cloth's own weight per vertex deflects it by
+        /// `g h^2 / 1e3` (a micrometre at 120 Hz). Springs as stiff as the cloth's stiffest
+        /// mode (`m omega^2`, 40 times stiffer in tests/table_edge.rs) made the re-detection's
+        /// drift of micrometres into newtons and slowed a frictionless strip sliding over the
+        /// edge (0.39 m instead of 0.57 m in 2 s).
+        const CONTACT_STIFFNESS: f64 = 1e3;
+        self.constraints.contacts.clear();
+        if !self.integrator.solves_contacts() {
+            return;
+        }
         let n = self.cloth.len();
-        let mut rubbing: Vec<&crate::collide::FeatureFriction> = contacts
-            .iter()
-            .filter(|c| {
-                let i = c.vertex as usize;
-                i < n
-                    && c.surface_velocity == Vec3::ZERO
-                    && c.dvn > 0.0
-                    && c.mu > 0.0
-                    && self.constraints.filter[i] != Filter::Fixed
-            })
-            .collect();
-        rubbing.sort_by_key(|c| c.vertex);
-        for group in rubbing.chunk_by(|a, b| a.vertex == b.vertex) {
-            // One drag per edge normal: repeated contacts (several passes, faces and edges around
-            // the vertex) with the same normal count once, with their largest push.
-            let mut kept: Vec<(Vec3, f64)> = Vec::new();
-            for c in group {
-                let f = c.mu * c.dvn;
-                match kept.iter_mut().find(|k| k.0.dot(c.normal) > 0.99) {
-                    Some(k) => k.1 = k.1.max(f),
-                    None => kept.push((c.normal, f)),
+        let solves_friction = self.integrator.solves_friction();
+        let Some(stage) = self.collision.as_mut() else {
+            return;
+        };
+        let (mass, filter) = (&self.cloth.mass, &self.constraints.filter);
+        let lagged = &self.spring_forces;
+        let mut sprung = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        for c in stage.feature_contacts() {
+            // A face or edge answered in two passes is one contact: keep the first.
+            if c.verts.iter().any(|&v| v as usize >= n) || !seen.insert(c.verts) {
+                continue;
+            }
+            let slots =
+                || (0..3).filter(|&k| c.weights[k] > 0.0 && !c.verts[..k].contains(&c.verts[k]));
+            let m: f64 = slots()
+                .map(|k| c.weights[k] * mass[c.verts[k] as usize])
+                .sum();
+            let spring = crate::integrate::ContactSpring {
+                verts: c.verts,
+                weights: c.weights,
+                normal: c.normal,
+                point: c.point,
+                gap: c.gap,
+                stiffness: CONTACT_STIFFNESS * m / (h * h),
+            };
+            let movable = slots().any(|k| filter[c.verts[k] as usize] != Filter::Fixed);
+            if !spring.is_valid(n) || !movable {
+                continue;
+            }
+            // The normal force of the last solve's spring on this face or edge (none for a new
+            // contact: the collision stage gave it friction): the start depth holds the
+            // re-detection's drift, micrometres that the stiff spring turns into newtons.
+            let normal_force = lagged
+                .binary_search_by(|l| l.0.cmp(&c.verts))
+                .map_or(0.0, |k| lagged[k].1);
+            sprung.push(c.verts);
+            for k in slots() {
+                let i = c.verts[k] as usize;
+                let limit = c.mu * normal_force * c.weights[k];
+                if solves_friction && limit > 0.0 && filter[i] != Filter::Fixed {
+                    self.constraints.friction.push(crate::integrate::Friction {
+                        vertex: i as u32,
+                        limit,
+                        reference: Vec3::ZERO,
+                        normal: Some(c.normal),
+                    });
                 }
             }
-            let i = group[0].vertex as usize;
-            for (normal, mu_dvn) in kept {
-                out.push(crate::integrate::Friction {
-                    vertex: i as u32,
-                    limit: mu_dvn * self.cloth.mass[i] / h,
-                    reference: Vec3::ZERO,
-                    normal: Some(normal),
-                });
-            }
+            self.constraints.contacts.push(spring);
         }
+        stage.set_sprung(sprung);
+    }
+
+    /// Bound on the cloth's highest angular frequency (rad/s): the square root of the sum over
+    /// elastic effects of their Gershgorin bounds on `omega^2`.
+    fn omega_bound(&mut self) -> f64 {
+        *self.omega_bound.get_or_insert_with(|| {
+            let sum: f64 = self
+                .effects
+                .stiffness(&self.cloth.mass)
+                .iter()
+                .map(|b| b.omega_sq)
+                .sum();
+            sum.sqrt()
+        })
     }
 
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
@@ -763,7 +808,7 @@ impl Simulation {
     /// vertex is pulled away from the surface by the other forces is released instead of held.
     /// A vertex held by two or three surfaces keeps its velocity along all their normals (see
     /// [`HeldNormals`]). Returns the held vertices with their normals.
-    fn contact_constraints(&mut self, t: f64, h: f64) -> Vec<(usize, HeldNormals, f64)> {
+    fn contact_constraints(&mut self, t: f64) -> Vec<(usize, HeldNormals, f64)> {
         let mut held = Vec::new();
         let Some(stage) = self.collision.as_ref() else {
             return held;
@@ -779,6 +824,12 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
+        // Edge springs push too: a cloth lying on a table and over its edge is lifted off the
+        // top near the edge by the edge's reaction (the segment over the edge is a lever carrying
+        // the hanging part); held there, the bilateral filter would glue it to the table.
+        for c in &self.constraints.contacts {
+            c.add_force(c.depth(&self.cloth.x).max(0.0), 1.0, &mut self.scratch_f);
+        }
         // The contacts grouped by vertex (in contact order within a vertex).
         let mut contacts: Vec<(usize, Vec3, Vec3, usize)> = stage
             .contacts()
@@ -808,10 +859,7 @@ impl Simulation {
                 self.held_friction(i, &normals, mu, f, &mut friction);
             }
         }
-        if solves_friction {
-            self.feature_friction(stage.feature_friction(), h, &mut friction);
-        }
-        self.constraints.friction = friction;
+        self.constraints.friction.extend(friction);
         held
     }
 
