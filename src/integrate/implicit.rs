@@ -144,6 +144,7 @@ impl Pcg {
             scratch(buf, n);
         }
         self.pinv.resize(n, Mat3::IDENTITY);
+        let (mut guess, mut target) = (false, false);
         for i in 0..n {
             let di = a.diagonal(i);
             let inv = di.inverse();
@@ -152,16 +153,45 @@ impl Pcg {
             } else {
                 Mat3::IDENTITY
             };
-            dv[i] = filt[i].apply(dv[i]) + z[i];
+            // The free part of the guess in `c`, the constrained part (`z`) in `dv`.
+            self.c[i] = filt[i].apply(dv[i]);
+            dv[i] = z[i];
+            guess |= self.c[i] != Vec3::ZERO;
+            target |= z[i] != Vec3::ZERO;
         }
-        a.mul(dv, &mut self.q);
+        // r = S (b - A z): the residual of the start without the guess.
+        if target {
+            a.mul(dv, &mut self.q);
+        } else {
+            self.q.fill(Vec3::ZERO);
+        }
         let mut bnorm2 = 0.0;
-        let mut rnorm2 = 0.0;
         for i in 0..n {
-            self.r[i] = filt[i].apply(b[i] - self.q[i]);
-            bnorm2 += filt[i].apply(b[i]).length_squared();
-            rnorm2 += self.r[i].length_squared();
+            let sb = filt[i].apply(b[i]);
+            self.r[i] = sb - filt[i].apply(self.q[i]);
+            bnorm2 += sb.length_squared();
         }
+        // The guess `g` enters scaled by the `alpha` that minimises the error's energy norm along
+        // it, `alpha = g.r / g.SAS g`: never worse than starting from zero (alpha = 0), and
+        // exact when the solution is a multiple of `g`.
+        if guess {
+            a.mul(&self.c, &mut self.q);
+            let (mut gr, mut gag) = (0.0, 0.0);
+            for i in 0..n {
+                self.q[i] = filt[i].apply(self.q[i]);
+                gr += self.c[i].dot(self.r[i]);
+                gag += self.c[i].dot(self.q[i]);
+            }
+            let alpha = gr / gag;
+            if gag > 0.0 && alpha.is_finite() {
+                for i in 0..n {
+                    dv[i] += self.c[i] * alpha;
+                    self.r[i] -= self.q[i] * alpha;
+                }
+            }
+        }
+        let rnorm2: f64 = self.r.iter().map(|r| r.length_squared()).sum();
+        let mut rnorm2 = rnorm2;
         let bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
         let tol2 = tol * tol;
         let precondition =

@@ -24,6 +24,8 @@ use thiserror::Error;
 
 /// Rows this large or larger are multiplied in parallel.
 const PAR_ROWS: usize = 2048;
+/// Rows per parallel task of a large product.
+const PAR_CHUNK: usize = 512;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
 const THETA: f32 = 0.08;
 /// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
@@ -135,15 +137,17 @@ impl Csr {
 
     /// `y = A x`.
     pub fn mul(&self, x: &[V3], y: &mut [V3]) {
-        if y.len() >= PAR_ROWS {
-            y.par_iter_mut()
-                .enumerate()
-                .with_min_len(512)
-                .for_each(|(r, yr)| *yr = self.row_times(r, x));
-        } else {
-            for (r, yr) in y.iter_mut().enumerate() {
-                *yr = self.row_times(r, x);
+        let rows = |start: usize, y: &mut [V3]| {
+            for (k, yr) in y.iter_mut().enumerate() {
+                *yr = self.row_times(start + k, x);
             }
+        };
+        if y.len() >= PAR_ROWS {
+            y.par_chunks_mut(PAR_CHUNK)
+                .enumerate()
+                .for_each(|(c, yc)| rows(c * PAR_CHUNK, yc));
+        } else {
+            rows(0, y);
         }
     }
 
