@@ -22,10 +22,8 @@ use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;
 use thiserror::Error;
 
-/// Rows this large or larger are multiplied in parallel.
-const PAR_ROWS: usize = 2048;
-/// Rows per parallel task of a large product.
-const PAR_CHUNK: usize = 512;
+/// Products with this many blocks or more are split into parallel tasks.
+const PAR_BLOCKS: usize = 16 * 1024;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
 const THETA: f32 = 0.08;
 /// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
@@ -64,6 +62,8 @@ pub struct Csr {
     vals: Vec<M3>,
     /// Scratch of [`Csr::filtered`]: `|A_ii|_F^1/2` per row.
     dnorm: Vec<f64>,
+    /// Block columns: every entry of `cols` is below it (the products index `x` unchecked).
+    ncols: usize,
 }
 
 impl Csr {
@@ -77,6 +77,7 @@ impl Csr {
     /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
     pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
         let n = a.rows();
+        self.ncols = n;
         self.row_start.clear();
         self.cols.clear();
         self.vals.clear();
@@ -129,23 +130,33 @@ impl Csr {
         (&self.cols[s..e], &self.vals[s..e])
     }
 
+    /// Row `r` times `x`. Safety: `x.len() >= self.ncols`.
     #[inline(always)]
-    fn row_times(&self, r: usize, x: &[V3]) -> V3 {
+    unsafe fn row_times(&self, r: usize, x: &[V3]) -> V3 {
         let (cols, vals) = self.row(r);
-        row_dot(cols, vals, x)
+        // SAFETY: every column is below `ncols <= x.len()`.
+        unsafe { row_dot(cols, vals, x) }
     }
 
     /// `y = A x`.
     pub fn mul(&self, x: &[V3], y: &mut [V3]) {
+        assert!(
+            x.len() >= self.ncols && y.len() == self.rows(),
+            "mul: size mismatch"
+        );
         let rows = |start: usize, y: &mut [V3]| {
             for (k, yr) in y.iter_mut().enumerate() {
-                *yr = self.row_times(start + k, x);
+                // SAFETY: `x.len() >= ncols` (asserted above).
+                *yr = unsafe { self.row_times(start + k, x) };
             }
         };
-        if y.len() >= PAR_ROWS {
-            y.par_chunks_mut(PAR_CHUNK)
+        // Parallel by work, not rows: the restriction `P^T` has few rows but the fine level's
+        // blocks.
+        if self.cols.len() >= PAR_BLOCKS && y.len() >= 64 {
+            let chunk = y.len().div_ceil(8).max(32);
+            y.par_chunks_mut(chunk)
                 .enumerate()
-                .for_each(|(c, yc)| rows(c * PAR_CHUNK, yc));
+                .for_each(|(c, yc)| rows(c * chunk, yc));
         } else {
             rows(0, y);
         }
@@ -226,6 +237,7 @@ impl Csr {
             cols,
             vals,
             dnorm: Vec::new(),
+            ncols: self.rows(),
         }
     }
 
@@ -271,6 +283,7 @@ impl Csr {
             cols: Vec::new(),
             vals: Vec::new(),
             dnorm: Vec::new(),
+            ncols,
         };
         out.row_start.push(0);
         for (lens, cols, vals) in parts {
@@ -286,17 +299,25 @@ impl Csr {
 }
 
 /// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
+///
+/// Safety: every column in `cols` is below `x.len()`.
 #[inline(always)]
-fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
-    row_dot_at(cols, vals, x, 0)
+unsafe fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
+    // SAFETY: forwarded contract (offset 0).
+    unsafe { row_dot_at(cols, vals, x, 0) }
 }
 
-/// [`row_dot`] with `x` holding the unknowns from index `offset` on.
+/// [`row_dot`] with `x` holding the unknowns from index `offset` on. Unchecked indexing: the
+/// bounds checks cost a third of the multigrid cycle's instructions.
+///
+/// Safety: every column `j` in `cols` satisfies `offset <= j < offset + x.len()`.
 #[inline(always)]
-fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
+unsafe fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
     let mut acc = V3::ZERO;
     for (&j, m) in cols.iter().zip(vals) {
-        acc += *m * x[j as usize - offset];
+        debug_assert!(j as usize >= offset && (j as usize - offset) < x.len());
+        // SAFETY: in bounds by the contract.
+        acc += *m * unsafe { *x.get_unchecked(j as usize - offset) };
     }
     acc
 }
@@ -442,6 +463,7 @@ fn smoothed_prolongator(a: &Csr, dinv: &[M3], agg: &[u32], nc: usize, omega: f32
         cols: Vec::new(),
         vals: Vec::new(),
         dnorm: Vec::new(),
+        ncols: nc,
     };
     p.row_start.push(0);
     for i in 0..n {
@@ -600,6 +622,8 @@ struct Level {
 impl Level {
     fn new(mut a: Csr, level: usize) -> Result<Level, MultigridError> {
         let n = a.rows();
+        // The sweeps index `x` (n rows) by column unchecked.
+        assert_eq!(a.ncols, n, "multigrid level {level} is not square");
         a.sort_rows();
         let diag = a.diagonal_slots(level)?;
         let dinv = invert_diagonal(&a, level)?;
@@ -623,7 +647,8 @@ impl Level {
         let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
             let (cols, vals) = a.row(i);
-            let s = b[i] - row_dot(cols, vals, x);
+            // SAFETY: the level is square (`Level::new`) and `x` has its rows.
+            let s = b[i] - unsafe { row_dot(cols, vals, x) };
             x[i] += dinv[i] * s;
         };
         if reverse {
@@ -652,7 +677,10 @@ impl Level {
             let offset = rows.start;
             for i in rows {
                 let lower = cut.map_or(a.row_start[i], |c| c[i])..diag[i];
-                let s = b[i] - row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset);
+                // SAFETY: the lower part of row `i` (from the cut in the second half) has columns
+                // in `offset..i`, and `x` holds this half's rows.
+                let s =
+                    b[i] - unsafe { row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset) };
                 x[i - offset] = dinv[i] * s;
             }
         };
@@ -696,9 +724,11 @@ impl Level {
                 } else {
                     (split[i]..e, s..split[i])
                 };
+                // SAFETY: `own` holds the columns of this half (rows sorted, cut at `mid`), which
+                // `x` holds from `offset` on; `x_old` has every row of the square level.
                 let r = b[i]
-                    - row_dot_at(&a.cols[own.clone()], &a.vals[own], x, offset)
-                    - row_dot(&a.cols[cross.clone()], &a.vals[cross], x_old);
+                    - unsafe { row_dot_at(&a.cols[own.clone()], &a.vals[own], x, offset) }
+                    - unsafe { row_dot(&a.cols[cross.clone()], &a.vals[cross], x_old) };
                 x[i - offset] += dinv[i] * r;
             }
         };
@@ -713,19 +743,34 @@ impl Level {
     /// With halves, the second half's rows were solved without the columns before the cut,
     /// which therefore join the residual.
     fn residual_after_forward_sweep(&mut self) {
-        let a = &self.a;
-        let (mid, split) = match &self.halves {
-            Some(h) => (h.mid, h.split.as_slice()),
-            None => (usize::MAX, &[][..]),
-        };
-        for (i, ri) in self.r.iter_mut().enumerate() {
-            let upper = self.diag[i] + 1..a.row_start[i + 1];
-            let mut acc = row_dot(&a.cols[upper.clone()], &a.vals[upper], &self.x);
-            if i >= mid {
-                let cross = a.row_start[i]..split[i];
-                acc += row_dot(&a.cols[cross.clone()], &a.vals[cross], &self.x);
+        let Level {
+            a,
+            diag,
+            x,
+            r,
+            halves,
+            ..
+        } = self;
+        let rows = |start: usize, r: &mut [V3], split: Option<&[usize]>| {
+            for (k, ri) in r.iter_mut().enumerate() {
+                let i = start + k;
+                let upper = diag[i] + 1..a.row_start[i + 1];
+                // SAFETY: the level is square and `x` has all its rows.
+                let mut acc = unsafe { row_dot(&a.cols[upper.clone()], &a.vals[upper], x) };
+                if let Some(split) = split {
+                    let cross = a.row_start[i]..split[i];
+                    // SAFETY: as above.
+                    acc += unsafe { row_dot(&a.cols[cross.clone()], &a.vals[cross], x) };
+                }
+                *ri = -acc;
             }
-            *ri = -acc;
+        };
+        match halves {
+            None => rows(0, r, None),
+            Some(h) => {
+                let (ra, rb) = r.split_at_mut(h.mid);
+                rayon::join(|| rows(0, ra, None), || rows(h.mid, rb, Some(&h.split)));
+            }
         }
     }
 }
@@ -817,6 +862,11 @@ impl Multigrid {
     /// the smoother then sees the current matrix while the coarse correction is from the last
     /// build. Still a symmetric positive definite preconditioner.
     pub fn refresh_finest(&mut self, mut a: Csr) -> Result<(), MultigridError> {
+        // The sweeps index `x` by column unchecked: same square size as the level it replaces.
+        assert!(
+            a.ncols == a.rows() && a.rows() == self.rows(),
+            "finest matrix is not square or has another size"
+        );
         a.sort_rows();
         let diag = a.diagonal_slots(0)?;
         let dinv = invert_diagonal(&a, 0)?;
