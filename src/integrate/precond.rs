@@ -797,34 +797,77 @@ pub struct Multigrid {
     levels: Vec<Level>,
     dense: Option<Dense>,
     tmp: Vec<f64>,
+    /// How each level was coarsened, for [`Multigrid::rebuild`].
+    coarsening: Vec<Coarsening>,
+}
+
+/// The symbolic part of one coarsening: the aggregate of every row, the aggregate count and
+/// the prolongator's damping `omega = 4 / (3 rho(D^-1 A))`.
+#[derive(Debug, Clone)]
+struct Coarsening {
+    agg: Vec<u32>,
+    nc: usize,
+    omega: f32,
 }
 
 impl Multigrid {
     /// Builds the hierarchy for the (filtered, SPD) matrix `a`.
     pub fn build(a: Csr) -> Result<Multigrid, MultigridError> {
+        Self::construct(a, None)
+    }
+
+    /// Rebuilds the hierarchy for `a` (same size) with the last build's aggregates and
+    /// prolongator damping: new prolongator values and Galerkin products, but no aggregation
+    /// and no spectral-radius estimate. For a cloth that rotates, the coarse levels follow its
+    /// springs' new directions at a fraction of a full build's cost.
+    pub fn rebuild(&mut self, a: Csr) -> Result<(), MultigridError> {
+        if a.rows() != self.rows() {
+            *self = Self::build(a)?;
+            return Ok(());
+        }
+        let plan = std::mem::take(&mut self.coarsening);
+        *self = Self::construct(a, Some(plan))?;
+        Ok(())
+    }
+
+    /// A full build (`plan` = `None`), or one along a given coarsening.
+    fn construct(a: Csr, plan: Option<Vec<Coarsening>>) -> Result<Multigrid, MultigridError> {
         if a.rows() == 0 {
             return Err(MultigridError::Empty);
         }
         let mut levels = vec![Level::new(a, 0)?];
+        let mut coarsening = Vec::new();
+        let mut plan = plan.map(Vec::into_iter);
         while levels.len() < MAX_LEVELS {
             let depth = levels.len() - 1;
             let fine = &mut levels[depth];
             let n = fine.a.rows();
-            if n <= COARSEST_ROWS {
-                break;
-            }
-            let diag = fine.a.diagonal_blocks(depth)?;
-            let (agg, nc) = aggregate(&fine.a, &diag);
-            if nc as f64 > 0.85 * n as f64 || nc == 0 {
-                break; // coarsening stalled
-            }
-            let omega = 4.0 / (3.0 * spectral_radius(&fine.a, &fine.dinv));
-            let p = smoothed_prolongator(&fine.a, &fine.dinv, &agg, nc, omega);
+            let step = match plan.as_mut() {
+                Some(p) => match p.next() {
+                    Some(c) if c.agg.len() == n => c,
+                    _ => break,
+                },
+                None => {
+                    if n <= COARSEST_ROWS {
+                        break;
+                    }
+                    let diag = fine.a.diagonal_blocks(depth)?;
+                    let (agg, nc) = aggregate(&fine.a, &diag);
+                    if nc as f64 > 0.85 * n as f64 || nc == 0 {
+                        break; // coarsening stalled
+                    }
+                    let omega = 4.0 / (3.0 * spectral_radius(&fine.a, &fine.dinv));
+                    Coarsening { agg, nc, omega }
+                }
+            };
+            let nc = step.nc;
+            let p = smoothed_prolongator(&fine.a, &fine.dinv, &step.agg, nc, step.omega);
             let pt = p.transpose(nc);
             let ap = fine.a.matmul(&p, nc);
             let coarse = pt.matmul(&ap, nc);
             fine.p = p;
             fine.pt = pt;
+            coarsening.push(step);
             let level = levels.len();
             levels.push(Level::new(coarse, level)?);
         }
@@ -838,6 +881,7 @@ impl Multigrid {
             levels,
             dense,
             tmp: Vec::new(),
+            coarsening,
         })
     }
 
