@@ -22,6 +22,8 @@ use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;
 use thiserror::Error;
 
+/// Matrices with this many rows or more are filtered in two parallel halves.
+const PAR_FILTER_ROWS: usize = 2048;
 /// Products with this many blocks or more are split into parallel tasks.
 const PAR_BLOCKS: usize = 16 * 1024;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
@@ -64,6 +66,16 @@ pub struct Csr {
     dnorm: Vec<f64>,
     /// Block columns: every entry of `cols` is below it (the products index `x` unchecked).
     ncols: usize,
+    /// Scratch of [`Csr::filtered`]: the second half's rows.
+    spill: Spill,
+}
+
+/// Rows filtered in parallel before they are appended.
+#[derive(Debug, Clone, Default)]
+struct Spill {
+    cols: Vec<u32>,
+    vals: Vec<M3>,
+    ends: Vec<usize>,
 }
 
 impl Csr {
@@ -77,6 +89,7 @@ impl Csr {
     /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
     pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
         let n = a.rows();
+        assert_eq!(filter.len(), n, "one filter per row");
         self.ncols = n;
         self.row_start.clear();
         self.cols.clear();
@@ -85,39 +98,56 @@ impl Csr {
         self.dnorm.clear();
         self.dnorm
             .extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
-        let drop2 = DROP * DROP;
-        for (i, fi) in filter.iter().enumerate().take(n) {
-            let (cols, vals) = a.row(i);
-            let si = fi.matrix();
-            let mut diag = usize::MAX;
-            let mut lumped = Mat3::ZERO;
-            for (&j, &blk) in cols.iter().zip(vals) {
-                let fj = &filter[j as usize];
-                let mut m = match (fi, fj) {
-                    (Filter::Free, Filter::Free) => blk,
-                    _ => si * blk * fj.matrix(),
-                };
-                if j as usize == i {
-                    if !matches!(fi, Filter::Free) {
-                        let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
-                        m += (Mat3::IDENTITY - si) * c;
-                    }
-                    diag = self.cols.len();
-                } else {
-                    let scale = self.dnorm[i] * self.dnorm[j as usize];
-                    if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
-                        lumped += m;
-                        continue;
-                    }
-                }
-                self.cols.push(j);
-                self.vals.push(single(&m));
-            }
-            if diag != usize::MAX {
-                self.vals[diag] += single(&lumped);
-            }
-            self.row_start.push(self.cols.len());
+        let dnorm = &self.dnorm;
+        if n < PAR_FILTER_ROWS {
+            filter_rows(
+                a,
+                filter,
+                dnorm,
+                0..n,
+                &mut self.cols,
+                &mut self.vals,
+                &mut self.row_start,
+            );
+            return;
         }
+        // Two halves in parallel (the second into scratch, appended after), row by row the
+        // same numbers as the serial pass.
+        let mid = n / 2;
+        let spill = &mut self.spill;
+        spill.cols.clear();
+        spill.vals.clear();
+        spill.ends.clear();
+        spill.ends.push(0);
+        rayon::join(
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    0..mid,
+                    &mut self.cols,
+                    &mut self.vals,
+                    &mut self.row_start,
+                )
+            },
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    mid..n,
+                    &mut spill.cols,
+                    &mut spill.vals,
+                    &mut spill.ends,
+                )
+            },
+        );
+        let base = self.cols.len();
+        self.cols.extend_from_slice(&spill.cols);
+        self.vals.extend_from_slice(&spill.vals);
+        self.row_start
+            .extend(spill.ends[1..].iter().map(|e| base + e));
     }
 
     pub fn rows(&self) -> usize {
@@ -238,6 +268,7 @@ impl Csr {
             vals,
             dnorm: Vec::new(),
             ncols: self.rows(),
+            spill: Spill::default(),
         }
     }
 
@@ -284,6 +315,7 @@ impl Csr {
             vals: Vec::new(),
             dnorm: Vec::new(),
             ncols,
+            spill: Spill::default(),
         };
         out.row_start.push(0);
         for (lens, cols, vals) in parts {
@@ -295,6 +327,53 @@ impl Csr {
             out.vals.extend(vals);
         }
         out
+    }
+}
+
+/// Rows `rows` of [`Csr::filtered`], appended to `cols` and `vals`, each row's end (relative to
+/// `ends`' first entry's storage) pushed to `ends`.
+fn filter_rows(
+    a: &BlockCsr,
+    filter: &[Filter],
+    dnorm: &[f64],
+    rows: std::ops::Range<usize>,
+    out_cols: &mut Vec<u32>,
+    out_vals: &mut Vec<M3>,
+    ends: &mut Vec<usize>,
+) {
+    let drop2 = DROP * DROP;
+    for i in rows {
+        let fi = &filter[i];
+        let (cols, vals) = a.row(i);
+        let si = fi.matrix();
+        let mut diag = usize::MAX;
+        let mut lumped = Mat3::ZERO;
+        for (&j, &blk) in cols.iter().zip(vals) {
+            let fj = &filter[j as usize];
+            let mut m = match (fi, fj) {
+                (Filter::Free, Filter::Free) => blk,
+                _ => si * blk * fj.matrix(),
+            };
+            if j as usize == i {
+                if !matches!(fi, Filter::Free) {
+                    let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
+                    m += (Mat3::IDENTITY - si) * c;
+                }
+                diag = out_cols.len();
+            } else {
+                let scale = dnorm[i] * dnorm[j as usize];
+                if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
+                    lumped += m;
+                    continue;
+                }
+            }
+            out_cols.push(j);
+            out_vals.push(single(&m));
+        }
+        if diag != usize::MAX {
+            out_vals[diag] += single(&lumped);
+        }
+        ends.push(out_cols.len());
     }
 }
 
@@ -464,6 +543,7 @@ fn smoothed_prolongator(a: &Csr, dinv: &[M3], agg: &[u32], nc: usize, omega: f32
         vals: Vec::new(),
         dnorm: Vec::new(),
         ncols: nc,
+        spill: Spill::default(),
     };
     p.row_start.push(0);
     for i in 0..n {
@@ -975,6 +1055,51 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
 mod tests {
     use super::*;
     use crate::integrate::PatternBuilder;
+
+    /// The two-halves filtering of a large matrix is the serial one, block for block.
+    #[test]
+    fn parallel_filtering_is_the_serial_one() {
+        let n = PAR_FILTER_ROWS + 301;
+        let mut p = PatternBuilder::new();
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                p.couple(i, (i + d) % n as u32);
+            }
+        }
+        let mut a = p.build(n);
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                let j = (i + d) % n as u32;
+                let t = f64::from(i) * 0.37 + f64::from(d);
+                let dir = Vec3::new(t.sin(), t.cos(), 0.3).normalize();
+                // Weak distance-2 couplings get lumped, the others stay.
+                let k = if d == 2 { 1e-6 } else { 1.0 };
+                let blk = Mat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z) * k;
+                a.add(i, i, blk);
+                a.add(j, j, blk);
+                a.add(i, j, -blk);
+                a.add(j, i, -blk);
+            }
+        }
+        a.add_diagonal(&vec![1e-2; n]);
+        let filter: Vec<Filter> = (0..n)
+            .map(|i| match i % 7 {
+                0 => Filter::Fixed,
+                3 => Filter::Direction(Vec3::new(0.6, 0.0, 0.8)),
+                _ => Filter::Free,
+            })
+            .collect();
+        let mut par = Csr::default();
+        par.filtered(&a, &filter);
+        let mut dnorm = Vec::new();
+        dnorm.extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
+        let (mut cols, mut vals, mut ends) = (Vec::new(), Vec::new(), vec![0]);
+        filter_rows(&a, &filter, &dnorm, 0..n, &mut cols, &mut vals, &mut ends);
+        assert_eq!(par.row_start, ends);
+        assert_eq!(par.cols, cols);
+        assert_eq!(par.vals, vals);
+        assert!(par.cols.len() < a.nnz_blocks(), "some blocks lumped");
+    }
 
     /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
     /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
