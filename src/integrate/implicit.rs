@@ -50,12 +50,10 @@ pub enum Preconditioner {
 /// Rebuild the hierarchy at least this often (steps); sooner when the iteration count exceeds
 /// the one right after the last full build by a quarter (plus two).
 const REBUILD_EVERY: u32 = 50;
-/// Iterations beyond those right after the last build at which the hierarchy is rebuilt along
-/// its aggregates (new values only). A swinging towel's coarse levels go stale within a few
-/// substeps (measured 20, 23, 27, 31 iterations at ages 0 to 3); such a rebuild costs about two
-/// iterations and brings the count back (robot_towel 64x64: 4.5% fewer instructions than full
-/// rebuilds on drift alone).
-const REFRESH_DRIFT: u32 = 1;
+/// Cost of a rebuild along the kept aggregates (new values only), in PCG iterations (measured
+/// about two at 64x64). A swinging towel's coarse levels go stale within a few substeps
+/// (measured 20, 23, 27, 31 iterations at ages 0 to 3); such a rebuild brings the count back.
+const REFRESH_COST: u32 = 2;
 
 /// Newton iterations at most beyond Baraff and Witkin's one linearised solve.
 const MAX_NEWTON: u32 = 8;
@@ -116,6 +114,8 @@ struct Hierarchy {
     /// Iterations of the first solve after the last build, and after the last full build.
     iterations_at_build: u32,
     iterations_at_full: u32,
+    /// Iterations beyond `iterations_at_build` summed over the solves since the last build.
+    excess: u32,
     /// Rebuild along the kept aggregates before the next solve.
     rebuild: bool,
 }
@@ -443,14 +443,18 @@ impl Implicit {
             let its = stats.iterations;
             if h.steps == 0 {
                 h.iterations_at_build = its;
+                h.excess = 0;
                 if h.age == 0 {
                     h.iterations_at_full = its;
                 }
             } else if its > h.iterations_at_full + h.iterations_at_full / 4 + 2 {
                 h.age = REBUILD_EVERY; // drifted despite the cheap rebuilds: full rebuild next
-            } else if its > h.iterations_at_build + REFRESH_DRIFT {
-                // The coarse levels went stale (the cloth turned): new values next step.
-                h.rebuild = true;
+            } else {
+                // The coarse levels go stale as the cloth turns: new values once the iterations
+                // lost to staleness add up to what the rebuild costs (at most twice the best
+                // rebuild schedule's cost, as in ski rental).
+                h.excess += its.saturating_sub(h.iterations_at_build);
+                h.rebuild = h.excess >= REFRESH_COST;
             }
         }
         stats
@@ -544,6 +548,7 @@ impl Implicit {
                     age: 0,
                     iterations_at_build: 0,
                     iterations_at_full: 0,
+                    excess: 0,
                     rebuild: false,
                 });
                 self.hierarchy.as_mut().map(|h| &mut h.mg)
