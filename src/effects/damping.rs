@@ -2,18 +2,24 @@
 //! All three are linear in velocity, so their `df/dv` is exact and constant in `v`.
 
 use super::{outer, Effect, State};
-use crate::integrate::{BlockCsr, PatternBuilder};
+use crate::integrate::{BlockCsr, PairSlots, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 /// `f_i = -kd ((v_i - v_j) . n) n` along each spring direction `n`.
 pub struct SpringDamping {
     pairs: Vec<(u32, u32)>,
     kd: Vec<f64>,
+    /// Jacobian block slots of every pair (no search per step).
+    slots: PairSlots,
 }
 
 impl SpringDamping {
     pub fn new(pairs: Vec<(u32, u32)>, kd: Vec<f64>) -> Self {
-        Self { pairs, kd }
+        Self {
+            pairs,
+            kd,
+            slots: PairSlots::default(),
+        }
     }
 }
 
@@ -35,13 +41,14 @@ impl Effect for SpringDamping {
         }
     }
     fn add_jacobians(&self, s: &State, _dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
-        for (&(i, j), &kd) in self.pairs.iter().zip(&self.kd) {
+        let slots = self.slots.get(dfdv, self.pairs.iter().copied());
+        for ((&(i, j), &kd), sl) in self.pairs.iter().zip(&self.kd).zip(&slots.1) {
             let n = (s.x[i as usize] - s.x[j as usize]).normalize_or_zero();
             let m = outer(n, n) * -kd;
-            dfdv.add(i, i, m);
-            dfdv.add(j, j, m);
-            dfdv.add(i, j, -m);
-            dfdv.add(j, i, -m);
+            dfdv.add_at(sl[0], m);
+            dfdv.add_at(sl[1], m);
+            dfdv.add_at(sl[2], -m);
+            dfdv.add_at(sl[3], -m);
         }
     }
 }

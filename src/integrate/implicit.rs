@@ -11,8 +11,10 @@
 //! ordinary cloth steps pass the check after the single solve and cost one extra force pass.
 //!
 //! The preconditioner is smoothed-aggregation multigrid on the filtered operator (see
-//! [`super::precond`]); its hierarchy is rebuilt only when the iteration count drifts up, and
-//! block Jacobi takes over whenever the hierarchy cannot be built.
+//! [`super::precond`]); its hierarchy gets new values along the same aggregates when the
+//! iteration count drifts up, a full rebuild when that no longer helps, and block Jacobi takes
+//! over whenever the hierarchy cannot be built. The solve starts from the combination of the
+//! last two steps' velocity changes that is best in the energy norm.
 
 use super::contact::ContactSpring;
 use super::friction::{self, Drag};
@@ -48,8 +50,12 @@ pub enum Preconditioner {
 }
 
 /// Rebuild the hierarchy at least this often (steps); sooner when the iteration count exceeds
-/// the one right after the last build by a quarter (plus two).
+/// the one right after the last full build by a quarter (plus two).
 const REBUILD_EVERY: u32 = 50;
+/// Cost of a rebuild along the kept aggregates (new values only), in PCG iterations (measured
+/// about two at 64x64). A swinging towel's coarse levels go stale within a few substeps
+/// (measured 20, 23, 27, 31 iterations at ages 0 to 3); such a rebuild brings the count back.
+const REFRESH_COST: u32 = 2;
 
 /// Solves at most with friction drags refitted to the sliding speed (see [`super::friction`]).
 const MAX_REFITS: u32 = 2;
@@ -106,8 +112,17 @@ struct Constant {
 /// The multigrid state kept across steps.
 struct Hierarchy {
     mg: Multigrid,
+    /// Solves since the last build (full or along the kept aggregates).
     steps: u32,
+    /// Solves since the last full build.
+    age: u32,
+    /// Iterations of the first solve after the last build, and after the last full build.
     iterations_at_build: u32,
+    iterations_at_full: u32,
+    /// Iterations beyond `iterations_at_build` summed over the solves since the last build.
+    excess: u32,
+    /// Rebuild along the kept aggregates before the next solve.
+    rebuild: bool,
 }
 
 /// What one conjugate-gradient solve did.
@@ -126,6 +141,9 @@ pub(crate) struct Pcg {
     c: Vec<Vec3>,
     q: Vec<Vec3>,
     s: Vec<Vec3>,
+    /// The second start direction and its product.
+    h: Vec<Vec3>,
+    ah: Vec<Vec3>,
 }
 
 impl Pcg {
@@ -143,12 +161,14 @@ impl Pcg {
         tol: f64,
         max_iterations: u32,
         dv: &mut [Vec3],
+        second: Option<&[Vec3]>,
     ) -> SolveStats {
         let n = b.len();
         for buf in [&mut self.r, &mut self.c, &mut self.q, &mut self.s] {
             scratch(buf, n);
         }
         self.pinv.resize(n, Mat3::IDENTITY);
+        let (mut guess, mut target) = (false, false);
         for i in 0..n {
             let di = a.diagonal(i);
             let inv = di.inverse();
@@ -157,16 +177,82 @@ impl Pcg {
             } else {
                 Mat3::IDENTITY
             };
-            dv[i] = filt[i].apply(dv[i]) + z[i];
+            // The free part of the guess in `c`, the constrained part (`z`) in `dv`.
+            self.c[i] = filt[i].apply(dv[i]);
+            dv[i] = z[i];
+            guess |= self.c[i] != Vec3::ZERO;
+            target |= z[i] != Vec3::ZERO;
         }
-        a.mul(dv, &mut self.q);
+        // r = S (b - A z): the residual of the start without the guess.
+        if target {
+            a.mul(dv, &mut self.q);
+        } else {
+            self.q.fill(Vec3::ZERO);
+        }
         let mut bnorm2 = 0.0;
-        let mut rnorm2 = 0.0;
         for i in 0..n {
-            self.r[i] = filt[i].apply(b[i] - self.q[i]);
-            bnorm2 += filt[i].apply(b[i]).length_squared();
-            rnorm2 += self.r[i].length_squared();
+            let sb = filt[i].apply(b[i]);
+            self.r[i] = sb - filt[i].apply(self.q[i]);
+            bnorm2 += sb.length_squared();
         }
+        // The guess enters as the combination of its directions (`g`, and `h` when given) that
+        // minimises the error's energy norm over their span (a Galerkin step on `S A S`): never
+        // worse than starting from zero, exact when the solution lies in the span.
+        if guess {
+            a.mul(&self.c, &mut self.q);
+            let (mut gr, mut gag) = (0.0, 0.0);
+            for i in 0..n {
+                self.q[i] = filt[i].apply(self.q[i]);
+                gr += self.c[i].dot(self.r[i]);
+                gag += self.c[i].dot(self.q[i]);
+            }
+            let mut two = None;
+            if let Some(second) = second.filter(|h| h.len() == n) {
+                scratch(&mut self.h, n);
+                scratch(&mut self.ah, n);
+                for i in 0..n {
+                    self.h[i] = filt[i].apply(second[i]);
+                }
+                a.mul(&self.h, &mut self.ah);
+                let (mut hr, mut hah, mut gah) = (0.0, 0.0, 0.0);
+                for i in 0..n {
+                    self.ah[i] = filt[i].apply(self.ah[i]);
+                    hr += self.h[i].dot(self.r[i]);
+                    hah += self.h[i].dot(self.ah[i]);
+                    gah += self.c[i].dot(self.ah[i]);
+                }
+                // 2x2 Gram system; skipped when `h` is (nearly) parallel to `g`.
+                let det = gag * hah - gah * gah;
+                if det > 1e-8 * gag * hah {
+                    let (ag, ah) = ((gr * hah - hr * gah) / det, (hr * gag - gr * gah) / det);
+                    if ag.is_finite() && ah.is_finite() {
+                        two = Some((ag, ah));
+                    }
+                }
+            }
+            // With one direction, `h` is `g` with coefficient zero.
+            let (ag, ah, h, ahv) = match two {
+                Some((ag, ah)) => (ag, ah, &self.h, &self.ah),
+                None if gag > 0.0 && (gr / gag).is_finite() => (gr / gag, 0.0, &self.c, &self.q),
+                None => (0.0, 0.0, &self.c, &self.q),
+            };
+            // Taken only when it also lowers the residual PCG stops on: the energy-norm optimum
+            // can leave a larger residual than the zero start (at loose tolerances, e.g. the
+            // node's real-time preview at 1e-2, that costs iterations).
+            let (mut before, mut after) = (0.0, 0.0);
+            for i in 0..n {
+                before += self.r[i].length_squared();
+                after += (self.r[i] - self.q[i] * ag - ahv[i] * ah).length_squared();
+            }
+            if (ag != 0.0 || ah != 0.0) && after < before {
+                for i in 0..n {
+                    dv[i] += self.c[i] * ag + h[i] * ah;
+                    self.r[i] -= self.q[i] * ag + ahv[i] * ah;
+                }
+            }
+        }
+        let rnorm2: f64 = self.r.iter().map(|r| r.length_squared()).sum();
+        let mut rnorm2 = rnorm2;
         let bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
         let tol2 = tol * tol;
         let precondition =
@@ -253,6 +339,10 @@ pub struct Implicit {
     end_potential: Option<f64>,
     /// The least energy-creating Newton iterate so far.
     best: Vec<Vec3>,
+    /// The velocity change of the step before the last (a start direction of the solve), and
+    /// the copy of the last one taken before it is overwritten.
+    older: Vec<Vec3>,
+    last: Vec<Vec3>,
 }
 
 impl Implicit {
@@ -283,6 +373,8 @@ impl Implicit {
             delta: Vec::new(),
             end_potential: None,
             best: Vec::new(),
+            older: Vec::new(),
+            last: Vec::new(),
         }
     }
 
@@ -418,7 +510,9 @@ impl Implicit {
     }
 
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
-    fn solve(&mut self, filt: &[Filter]) -> SolveStats {
+    /// `history`: `dv` holds the last step's velocity change and `older` the one before, both
+    /// start directions (else `dv` alone).
+    fn solve(&mut self, filt: &[Filter], history: bool) -> SolveStats {
         let (tol, max_it) = (self.settings.cg_tolerance, self.settings.cg_max_iterations);
         let use_mg = self.update_hierarchy(filt).is_some();
         let Some(a) = self.a.as_ref() else {
@@ -428,9 +522,18 @@ impl Implicit {
             Some(h) if use_mg => Some(&mut h.mg),
             _ => None,
         };
-        let mut stats = self
-            .pcg
-            .solve(a, filt, &self.b, &self.z, mgref, tol, max_it, &mut self.dv);
+        let second = history.then_some(self.older.as_slice());
+        let mut stats = self.pcg.solve(
+            a,
+            filt,
+            &self.b,
+            &self.z,
+            mgref,
+            tol,
+            max_it,
+            &mut self.dv,
+            second,
+        );
         if use_mg && (stats.residual.is_nan() || stats.residual > tol) && stats.iterations < max_it
         {
             // The multigrid-preconditioned iteration broke down early (degenerate input): retry
@@ -438,15 +541,34 @@ impl Implicit {
             log::debug!("multigrid PCG stopped early ({stats:?}); retrying with block Jacobi");
             self.hierarchy = None;
             self.dv.iter_mut().for_each(|x| *x = Vec3::ZERO);
-            stats = self
-                .pcg
-                .solve(a, filt, &self.b, &self.z, None, tol, max_it, &mut self.dv);
+            stats = self.pcg.solve(
+                a,
+                filt,
+                &self.b,
+                &self.z,
+                None,
+                tol,
+                max_it,
+                &mut self.dv,
+                None,
+            );
         }
         if let Some(h) = self.hierarchy.as_mut() {
+            let its = stats.iterations;
             if h.steps == 0 {
-                h.iterations_at_build = stats.iterations;
-            } else if stats.iterations > h.iterations_at_build + h.iterations_at_build / 4 + 2 {
-                h.steps = REBUILD_EVERY; // drifted: rebuild next step
+                h.iterations_at_build = its;
+                h.excess = 0;
+                if h.age == 0 {
+                    h.iterations_at_full = its;
+                }
+            } else if its > h.iterations_at_full + h.iterations_at_full / 4 + 2 {
+                h.age = REBUILD_EVERY; // drifted despite the cheap rebuilds: full rebuild next
+            } else {
+                // The coarse levels go stale as the cloth turns: new values once the iterations
+                // lost to staleness add up to what the rebuild costs (at most twice the best
+                // rebuild schedule's cost, as in ski rental).
+                h.excess += its.saturating_sub(h.iterations_at_build);
+                h.rebuild = h.excess >= REFRESH_COST;
             }
         }
         stats
@@ -517,12 +639,20 @@ impl Implicit {
         let reuse = self
             .hierarchy
             .as_ref()
-            .is_some_and(|h| h.mg.rows() == n && h.steps < REBUILD_EVERY);
+            .is_some_and(|h| h.mg.rows() == n && h.age < REBUILD_EVERY);
         if reuse {
             if let Some(h) = self.hierarchy.as_mut() {
-                match h.mg.refresh_finest(fine) {
+                let rebuild = h.rebuild;
+                let done = if rebuild {
+                    h.mg.rebuild(fine)
+                } else {
+                    h.mg.refresh_finest(fine)
+                };
+                match done {
                     Ok(()) => {
-                        h.steps += 1;
+                        h.age += 1;
+                        h.steps = if rebuild { 0 } else { h.steps + 1 };
+                        h.rebuild = false;
                         return self.hierarchy.as_mut().map(|h| &mut h.mg);
                     }
                     Err(e) => {
@@ -538,7 +668,11 @@ impl Implicit {
                 self.hierarchy = Some(Hierarchy {
                     mg,
                     steps: 0,
+                    age: 0,
                     iterations_at_build: 0,
+                    iterations_at_full: 0,
+                    excess: 0,
+                    rebuild: false,
                 });
                 self.hierarchy.as_mut().map(|h| &mut h.mg)
             }
@@ -595,6 +729,7 @@ impl Integrator for Implicit {
         self.a = Some(m);
         self.hierarchy = None;
         self.end_potential = None;
+        self.older.clear();
     }
 
     fn step(
@@ -625,7 +760,10 @@ impl Integrator for Implicit {
         for i in 0..n {
             self.z[i] = filt[i].constrained(d.constraints.target_velocity[i] - v[i]);
         }
-        let mut stats = self.solve(filt);
+        // The start directions: the last two steps' velocity changes.
+        self.last.clone_from(&self.dv);
+        let mut stats = self.solve(filt, true);
+        std::mem::swap(&mut self.older, &mut self.last);
         let mut cg_iterations = stats.iterations;
         for _ in 0..MAX_REFITS {
             let drags = self.refit_drags(v, h);
@@ -633,7 +771,7 @@ impl Integrator for Implicit {
             if !(drags || springs) {
                 break;
             }
-            stats = self.solve(filt);
+            stats = self.solve(filt, false);
             cg_iterations += stats.iterations;
         }
         self.linear_impulses(filt);
@@ -691,7 +829,7 @@ impl Integrator for Implicit {
             scratch(&mut self.dv, n);
             self.dv.fill(Vec3::ZERO);
             self.z.fill(Vec3::ZERO);
-            stats = self.solve(filt);
+            stats = self.solve(filt, false);
             cg_iterations += stats.iterations;
             for (total, c) in self.delta.iter_mut().zip(&self.dv) {
                 *total += *c;
@@ -837,7 +975,7 @@ mod tests {
             None
         };
         let mut dv = vec![Vec3::ZERO; b.len()];
-        let stats = Pcg::default().solve(a, filt, b, z, m.as_mut(), tol, 100_000, &mut dv);
+        let stats = Pcg::default().solve(a, filt, b, z, m.as_mut(), tol, 100_000, &mut dv, None);
         (dv, stats)
     }
 
@@ -882,6 +1020,43 @@ mod tests {
             .sum();
         let b2: f64 = (0..n).map(|i| filt[i].apply(b[i]).length_squared()).sum();
         assert!(r2.sqrt() <= 1e-11 * b2.sqrt());
+    }
+
+    /// The start from the span of two directions: exact (no iteration) when the solution lies
+    /// in it, while the first direction alone needs iterations; a useless second direction
+    /// (parallel to the first, or not finite) falls back to the first alone.
+    #[test]
+    fn start_directions_span_the_solution() {
+        let a = cloth_system(12);
+        let n = a.rows();
+        let mut rng = Rng(21);
+        let (filt, z) = constraints(n, &mut rng);
+        let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+        let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+        let e: Vec<Vec3> = (0..n).map(|_| rng.vec3() * 0.1).collect();
+        // x = (g - h) / 0.3 on the free components.
+        let g: Vec<Vec3> = x.iter().zip(&e).map(|(x, e)| *x * 0.3 + *e).collect();
+        let run = |second: Option<&[Vec3]>| {
+            let mut dv = g.clone();
+            let s = Pcg::default().solve(&a, &filt, &b, &z, None, 1e-9, 10_000, &mut dv, second);
+            (dv, s)
+        };
+        let (dv, two) = run(Some(&e));
+        assert_eq!(two.iterations, 0, "{two:?}");
+        let scale = x.iter().map(|v| v.length()).fold(0.0, f64::max);
+        for i in 0..n {
+            assert!((dv[i] - x[i]).length() <= 1e-6 * scale, "vertex {i}");
+        }
+        let (_, one) = run(None);
+        assert!(one.iterations > 5, "{one:?}");
+        let parallel: Vec<Vec3> = g.iter().map(|v| *v * 2.0).collect();
+        let mut bad = e.clone();
+        bad[3] = Vec3::NAN;
+        for second in [&parallel, &bad] {
+            let (dv, s) = run(Some(second));
+            assert_eq!(s.iterations, one.iterations, "{s:?} vs {one:?}");
+            assert!(s.residual <= 1e-9 && dv.iter().all(|v| v.is_finite()));
+        }
     }
 
     #[test]
@@ -948,6 +1123,64 @@ mod tests {
             );
             assert!(dot(&u, &mu) > 0.0);
         }
+    }
+
+    /// A rebuild along the kept aggregates reproduces a full build of the same matrix exactly
+    /// (same aggregates and damping, so the same numbers); rebuilt for a rotated cloth
+    /// (`R A R^T` blockwise) it preconditions as well as a fresh build (iterations within one),
+    /// while the stale hierarchy of the unrotated cloth does not (measured: 19 and 20
+    /// iterations, stale 167).
+    #[test]
+    fn rebuild_along_kept_aggregates_follows_a_rotation() {
+        let a = cloth_system(32);
+        let n = a.rows();
+        let filt = vec![Filter::Free; n];
+        let mut fine = Csr::default();
+        fine.filtered(&a, &filt);
+        let mut full = Multigrid::build(fine.clone()).expect("hierarchy");
+        let mut kept = Multigrid::build(fine.clone()).expect("hierarchy");
+        kept.rebuild(fine).expect("rebuild");
+        let mut rng = Rng(17);
+        let u: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+        let (mut zf, mut zk) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        full.apply(&u, &mut zf);
+        kept.apply(&u, &mut zk);
+        assert_eq!(zf, zk);
+        // Rotate every block by 60 degrees about x: the springs point elsewhere.
+        let r = Mat3::from_rotation_x(std::f64::consts::FRAC_PI_3);
+        let mut p = PatternBuilder::new();
+        for i in 0..n {
+            for &j in a.row(i).0 {
+                p.couple(i as u32, j);
+            }
+        }
+        let mut rotated = p.build(n);
+        for i in 0..n {
+            let (cols, vals) = a.row(i);
+            for (&j, m) in cols.iter().zip(vals) {
+                rotated.add(i as u32, j, r * *m * r.transpose());
+            }
+        }
+        let mut fine = Csr::default();
+        fine.filtered(&rotated, &filt);
+        let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+        let z = vec![Vec3::ZERO; n];
+        let iterations = |mg: &mut Multigrid| {
+            let mut dv = vec![Vec3::ZERO; n];
+            Pcg::default()
+                .solve(&rotated, &filt, &b, &z, Some(mg), 1e-8, 1000, &mut dv, None)
+                .iterations
+        };
+        let mut fresh = Multigrid::build(fine.clone()).expect("hierarchy");
+        kept.refresh_finest(fine.clone()).expect("refresh");
+        let stale_its = iterations(&mut kept);
+        kept.rebuild(fine).expect("rebuild");
+        let (kept_its, fresh_its) = (iterations(&mut kept), iterations(&mut fresh));
+        assert!(kept_its <= fresh_its + 1, "{kept_its} vs fresh {fresh_its}");
+        assert!(
+            stale_its > fresh_its + 1,
+            "stale {stale_its} vs fresh {fresh_its}"
+        );
     }
 
     #[test]

@@ -22,8 +22,10 @@ use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;
 use thiserror::Error;
 
-/// Rows this large or larger are multiplied in parallel.
-const PAR_ROWS: usize = 2048;
+/// Matrices with this many rows or more are filtered in two parallel halves.
+const PAR_FILTER_ROWS: usize = 2048;
+/// Products with this many blocks or more are split into parallel tasks.
+const PAR_BLOCKS: usize = 16 * 1024;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
 const THETA: f32 = 0.08;
 /// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
@@ -62,6 +64,18 @@ pub struct Csr {
     vals: Vec<M3>,
     /// Scratch of [`Csr::filtered`]: `|A_ii|_F^1/2` per row.
     dnorm: Vec<f64>,
+    /// Block columns: every entry of `cols` is below it (the products index `x` unchecked).
+    ncols: usize,
+    /// Scratch of [`Csr::filtered`]: the second half's rows.
+    spill: Spill,
+}
+
+/// Rows filtered in parallel before they are appended.
+#[derive(Debug, Clone, Default)]
+struct Spill {
+    cols: Vec<u32>,
+    vals: Vec<M3>,
+    ends: Vec<usize>,
 }
 
 impl Csr {
@@ -75,6 +89,8 @@ impl Csr {
     /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
     pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
         let n = a.rows();
+        assert_eq!(filter.len(), n, "one filter per row");
+        self.ncols = n;
         self.row_start.clear();
         self.cols.clear();
         self.vals.clear();
@@ -82,39 +98,56 @@ impl Csr {
         self.dnorm.clear();
         self.dnorm
             .extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
-        let drop2 = DROP * DROP;
-        for (i, fi) in filter.iter().enumerate().take(n) {
-            let (cols, vals) = a.row(i);
-            let si = fi.matrix();
-            let mut diag = usize::MAX;
-            let mut lumped = Mat3::ZERO;
-            for (&j, &blk) in cols.iter().zip(vals) {
-                let fj = &filter[j as usize];
-                let mut m = match (fi, fj) {
-                    (Filter::Free, Filter::Free) => blk,
-                    _ => si * blk * fj.matrix(),
-                };
-                if j as usize == i {
-                    if !matches!(fi, Filter::Free) {
-                        let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
-                        m += (Mat3::IDENTITY - si) * c;
-                    }
-                    diag = self.cols.len();
-                } else {
-                    let scale = self.dnorm[i] * self.dnorm[j as usize];
-                    if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
-                        lumped += m;
-                        continue;
-                    }
-                }
-                self.cols.push(j);
-                self.vals.push(single(&m));
-            }
-            if diag != usize::MAX {
-                self.vals[diag] += single(&lumped);
-            }
-            self.row_start.push(self.cols.len());
+        let dnorm = &self.dnorm;
+        if n < PAR_FILTER_ROWS {
+            filter_rows(
+                a,
+                filter,
+                dnorm,
+                0..n,
+                &mut self.cols,
+                &mut self.vals,
+                &mut self.row_start,
+            );
+            return;
         }
+        // Two halves in parallel (the second into scratch, appended after), row by row the
+        // same numbers as the serial pass.
+        let mid = n / 2;
+        let spill = &mut self.spill;
+        spill.cols.clear();
+        spill.vals.clear();
+        spill.ends.clear();
+        spill.ends.push(0);
+        rayon::join(
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    0..mid,
+                    &mut self.cols,
+                    &mut self.vals,
+                    &mut self.row_start,
+                )
+            },
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    mid..n,
+                    &mut spill.cols,
+                    &mut spill.vals,
+                    &mut spill.ends,
+                )
+            },
+        );
+        let base = self.cols.len();
+        self.cols.extend_from_slice(&spill.cols);
+        self.vals.extend_from_slice(&spill.vals);
+        self.row_start
+            .extend(spill.ends[1..].iter().map(|e| base + e));
     }
 
     pub fn rows(&self) -> usize {
@@ -127,23 +160,35 @@ impl Csr {
         (&self.cols[s..e], &self.vals[s..e])
     }
 
+    /// Row `r` times `x`. Safety: `x.len() >= self.ncols`.
     #[inline(always)]
-    fn row_times(&self, r: usize, x: &[V3]) -> V3 {
+    unsafe fn row_times(&self, r: usize, x: &[V3]) -> V3 {
         let (cols, vals) = self.row(r);
-        row_dot(cols, vals, x)
+        // SAFETY: every column is below `ncols <= x.len()`.
+        unsafe { row_dot(cols, vals, x) }
     }
 
     /// `y = A x`.
     pub fn mul(&self, x: &[V3], y: &mut [V3]) {
-        if y.len() >= PAR_ROWS {
-            y.par_iter_mut()
-                .enumerate()
-                .with_min_len(512)
-                .for_each(|(r, yr)| *yr = self.row_times(r, x));
-        } else {
-            for (r, yr) in y.iter_mut().enumerate() {
-                *yr = self.row_times(r, x);
+        assert!(
+            x.len() >= self.ncols && y.len() == self.rows(),
+            "mul: size mismatch"
+        );
+        let rows = |start: usize, y: &mut [V3]| {
+            for (k, yr) in y.iter_mut().enumerate() {
+                // SAFETY: `x.len() >= ncols` (asserted above).
+                *yr = unsafe { self.row_times(start + k, x) };
             }
+        };
+        // Parallel by work, not rows: the restriction `P^T` has few rows but the fine level's
+        // blocks.
+        if self.cols.len() >= PAR_BLOCKS && y.len() >= 64 {
+            let chunk = y.len().div_ceil(8).max(32);
+            y.par_chunks_mut(chunk)
+                .enumerate()
+                .for_each(|(c, yc)| rows(c * chunk, yc));
+        } else {
+            rows(0, y);
         }
     }
 
@@ -222,6 +267,8 @@ impl Csr {
             cols,
             vals,
             dnorm: Vec::new(),
+            ncols: self.rows(),
+            spill: Spill::default(),
         }
     }
 
@@ -267,6 +314,8 @@ impl Csr {
             cols: Vec::new(),
             vals: Vec::new(),
             dnorm: Vec::new(),
+            ncols,
+            spill: Spill::default(),
         };
         out.row_start.push(0);
         for (lens, cols, vals) in parts {
@@ -281,18 +330,73 @@ impl Csr {
     }
 }
 
-/// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
-#[inline(always)]
-fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
-    row_dot_at(cols, vals, x, 0)
+/// Rows `rows` of [`Csr::filtered`], appended to `cols` and `vals`, each row's end (relative to
+/// `ends`' first entry's storage) pushed to `ends`.
+fn filter_rows(
+    a: &BlockCsr,
+    filter: &[Filter],
+    dnorm: &[f64],
+    rows: std::ops::Range<usize>,
+    out_cols: &mut Vec<u32>,
+    out_vals: &mut Vec<M3>,
+    ends: &mut Vec<usize>,
+) {
+    let drop2 = DROP * DROP;
+    for i in rows {
+        let fi = &filter[i];
+        let (cols, vals) = a.row(i);
+        let si = fi.matrix();
+        let mut diag = usize::MAX;
+        let mut lumped = Mat3::ZERO;
+        for (&j, &blk) in cols.iter().zip(vals) {
+            let fj = &filter[j as usize];
+            let mut m = match (fi, fj) {
+                (Filter::Free, Filter::Free) => blk,
+                _ => si * blk * fj.matrix(),
+            };
+            if j as usize == i {
+                if !matches!(fi, Filter::Free) {
+                    let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
+                    m += (Mat3::IDENTITY - si) * c;
+                }
+                diag = out_cols.len();
+            } else {
+                let scale = dnorm[i] * dnorm[j as usize];
+                if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
+                    lumped += m;
+                    continue;
+                }
+            }
+            out_cols.push(j);
+            out_vals.push(single(&m));
+        }
+        if diag != usize::MAX {
+            out_vals[diag] += single(&lumped);
+        }
+        ends.push(out_cols.len());
+    }
 }
 
-/// [`row_dot`] with `x` holding the unknowns from index `offset` on.
+/// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
+///
+/// Safety: every column in `cols` is below `x.len()`.
 #[inline(always)]
-fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
+unsafe fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
+    // SAFETY: forwarded contract (offset 0).
+    unsafe { row_dot_at(cols, vals, x, 0) }
+}
+
+/// [`row_dot`] with `x` holding the unknowns from index `offset` on. Unchecked indexing: the
+/// bounds checks cost a third of the multigrid cycle's instructions.
+///
+/// Safety: every column `j` in `cols` satisfies `offset <= j < offset + x.len()`.
+#[inline(always)]
+unsafe fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
     let mut acc = V3::ZERO;
     for (&j, m) in cols.iter().zip(vals) {
-        acc += *m * x[j as usize - offset];
+        debug_assert!(j as usize >= offset && (j as usize - offset) < x.len());
+        // SAFETY: in bounds by the contract.
+        acc += *m * unsafe { *x.get_unchecked(j as usize - offset) };
     }
     acc
 }
@@ -438,6 +542,8 @@ fn smoothed_prolongator(a: &Csr, dinv: &[M3], agg: &[u32], nc: usize, omega: f32
         cols: Vec::new(),
         vals: Vec::new(),
         dnorm: Vec::new(),
+        ncols: nc,
+        spill: Spill::default(),
     };
     p.row_start.push(0);
     for i in 0..n {
@@ -596,6 +702,8 @@ struct Level {
 impl Level {
     fn new(mut a: Csr, level: usize) -> Result<Level, MultigridError> {
         let n = a.rows();
+        // The sweeps index `x` (n rows) by column unchecked.
+        assert_eq!(a.ncols, n, "multigrid level {level} is not square");
         a.sort_rows();
         let diag = a.diagonal_slots(level)?;
         let dinv = invert_diagonal(&a, level)?;
@@ -619,7 +727,8 @@ impl Level {
         let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
             let (cols, vals) = a.row(i);
-            let s = b[i] - row_dot(cols, vals, x);
+            // SAFETY: the level is square (`Level::new`) and `x` has its rows.
+            let s = b[i] - unsafe { row_dot(cols, vals, x) };
             x[i] += dinv[i] * s;
         };
         if reverse {
@@ -648,7 +757,10 @@ impl Level {
             let offset = rows.start;
             for i in rows {
                 let lower = cut.map_or(a.row_start[i], |c| c[i])..diag[i];
-                let s = b[i] - row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset);
+                // SAFETY: the lower part of row `i` (from the cut in the second half) has columns
+                // in `offset..i`, and `x` holds this half's rows.
+                let s =
+                    b[i] - unsafe { row_dot_at(&a.cols[lower.clone()], &a.vals[lower], x, offset) };
                 x[i - offset] = dinv[i] * s;
             }
         };
@@ -692,9 +804,11 @@ impl Level {
                 } else {
                     (split[i]..e, s..split[i])
                 };
+                // SAFETY: `own` holds the columns of this half (rows sorted, cut at `mid`), which
+                // `x` holds from `offset` on; `x_old` has every row of the square level.
                 let r = b[i]
-                    - row_dot_at(&a.cols[own.clone()], &a.vals[own], x, offset)
-                    - row_dot(&a.cols[cross.clone()], &a.vals[cross], x_old);
+                    - unsafe { row_dot_at(&a.cols[own.clone()], &a.vals[own], x, offset) }
+                    - unsafe { row_dot(&a.cols[cross.clone()], &a.vals[cross], x_old) };
                 x[i - offset] += dinv[i] * r;
             }
         };
@@ -709,19 +823,34 @@ impl Level {
     /// With halves, the second half's rows were solved without the columns before the cut,
     /// which therefore join the residual.
     fn residual_after_forward_sweep(&mut self) {
-        let a = &self.a;
-        let (mid, split) = match &self.halves {
-            Some(h) => (h.mid, h.split.as_slice()),
-            None => (usize::MAX, &[][..]),
-        };
-        for (i, ri) in self.r.iter_mut().enumerate() {
-            let upper = self.diag[i] + 1..a.row_start[i + 1];
-            let mut acc = row_dot(&a.cols[upper.clone()], &a.vals[upper], &self.x);
-            if i >= mid {
-                let cross = a.row_start[i]..split[i];
-                acc += row_dot(&a.cols[cross.clone()], &a.vals[cross], &self.x);
+        let Level {
+            a,
+            diag,
+            x,
+            r,
+            halves,
+            ..
+        } = self;
+        let rows = |start: usize, r: &mut [V3], split: Option<&[usize]>| {
+            for (k, ri) in r.iter_mut().enumerate() {
+                let i = start + k;
+                let upper = diag[i] + 1..a.row_start[i + 1];
+                // SAFETY: the level is square and `x` has all its rows.
+                let mut acc = unsafe { row_dot(&a.cols[upper.clone()], &a.vals[upper], x) };
+                if let Some(split) = split {
+                    let cross = a.row_start[i]..split[i];
+                    // SAFETY: as above.
+                    acc += unsafe { row_dot(&a.cols[cross.clone()], &a.vals[cross], x) };
+                }
+                *ri = -acc;
             }
-            *ri = -acc;
+        };
+        match halves {
+            None => rows(0, r, None),
+            Some(h) => {
+                let (ra, rb) = r.split_at_mut(h.mid);
+                rayon::join(|| rows(0, ra, None), || rows(h.mid, rb, Some(&h.split)));
+            }
         }
     }
 }
@@ -748,34 +877,77 @@ pub struct Multigrid {
     levels: Vec<Level>,
     dense: Option<Dense>,
     tmp: Vec<f64>,
+    /// How each level was coarsened, for [`Multigrid::rebuild`].
+    coarsening: Vec<Coarsening>,
+}
+
+/// The symbolic part of one coarsening: the aggregate of every row, the aggregate count and
+/// the prolongator's damping `omega = 4 / (3 rho(D^-1 A))`.
+#[derive(Debug, Clone)]
+struct Coarsening {
+    agg: Vec<u32>,
+    nc: usize,
+    omega: f32,
 }
 
 impl Multigrid {
     /// Builds the hierarchy for the (filtered, SPD) matrix `a`.
     pub fn build(a: Csr) -> Result<Multigrid, MultigridError> {
+        Self::construct(a, None)
+    }
+
+    /// Rebuilds the hierarchy for `a` (same size) with the last build's aggregates and
+    /// prolongator damping: new prolongator values and Galerkin products, but no aggregation
+    /// and no spectral-radius estimate. For a cloth that rotates, the coarse levels follow its
+    /// springs' new directions at a fraction of a full build's cost.
+    pub fn rebuild(&mut self, a: Csr) -> Result<(), MultigridError> {
+        if a.rows() != self.rows() {
+            *self = Self::build(a)?;
+            return Ok(());
+        }
+        let plan = std::mem::take(&mut self.coarsening);
+        *self = Self::construct(a, Some(plan))?;
+        Ok(())
+    }
+
+    /// A full build (`plan` = `None`), or one along a given coarsening.
+    fn construct(a: Csr, plan: Option<Vec<Coarsening>>) -> Result<Multigrid, MultigridError> {
         if a.rows() == 0 {
             return Err(MultigridError::Empty);
         }
         let mut levels = vec![Level::new(a, 0)?];
+        let mut coarsening = Vec::new();
+        let mut plan = plan.map(Vec::into_iter);
         while levels.len() < MAX_LEVELS {
             let depth = levels.len() - 1;
             let fine = &mut levels[depth];
             let n = fine.a.rows();
-            if n <= COARSEST_ROWS {
-                break;
-            }
-            let diag = fine.a.diagonal_blocks(depth)?;
-            let (agg, nc) = aggregate(&fine.a, &diag);
-            if nc as f64 > 0.85 * n as f64 || nc == 0 {
-                break; // coarsening stalled
-            }
-            let omega = 4.0 / (3.0 * spectral_radius(&fine.a, &fine.dinv));
-            let p = smoothed_prolongator(&fine.a, &fine.dinv, &agg, nc, omega);
+            let step = match plan.as_mut() {
+                Some(p) => match p.next() {
+                    Some(c) if c.agg.len() == n => c,
+                    _ => break,
+                },
+                None => {
+                    if n <= COARSEST_ROWS {
+                        break;
+                    }
+                    let diag = fine.a.diagonal_blocks(depth)?;
+                    let (agg, nc) = aggregate(&fine.a, &diag);
+                    if nc as f64 > 0.85 * n as f64 || nc == 0 {
+                        break; // coarsening stalled
+                    }
+                    let omega = 4.0 / (3.0 * spectral_radius(&fine.a, &fine.dinv));
+                    Coarsening { agg, nc, omega }
+                }
+            };
+            let nc = step.nc;
+            let p = smoothed_prolongator(&fine.a, &fine.dinv, &step.agg, nc, step.omega);
             let pt = p.transpose(nc);
             let ap = fine.a.matmul(&p, nc);
             let coarse = pt.matmul(&ap, nc);
             fine.p = p;
             fine.pt = pt;
+            coarsening.push(step);
             let level = levels.len();
             levels.push(Level::new(coarse, level)?);
         }
@@ -789,6 +961,7 @@ impl Multigrid {
             levels,
             dense,
             tmp: Vec::new(),
+            coarsening,
         })
     }
 
@@ -813,6 +986,11 @@ impl Multigrid {
     /// the smoother then sees the current matrix while the coarse correction is from the last
     /// build. Still a symmetric positive definite preconditioner.
     pub fn refresh_finest(&mut self, mut a: Csr) -> Result<(), MultigridError> {
+        // The sweeps index `x` by column unchecked: same square size as the level it replaces.
+        assert!(
+            a.ncols == a.rows() && a.rows() == self.rows(),
+            "finest matrix is not square or has another size"
+        );
         a.sort_rows();
         let diag = a.diagonal_slots(0)?;
         let dinv = invert_diagonal(&a, 0)?;
@@ -877,6 +1055,51 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
 mod tests {
     use super::*;
     use crate::integrate::PatternBuilder;
+
+    /// The two-halves filtering of a large matrix is the serial one, block for block.
+    #[test]
+    fn parallel_filtering_is_the_serial_one() {
+        let n = PAR_FILTER_ROWS + 301;
+        let mut p = PatternBuilder::new();
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                p.couple(i, (i + d) % n as u32);
+            }
+        }
+        let mut a = p.build(n);
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                let j = (i + d) % n as u32;
+                let t = f64::from(i) * 0.37 + f64::from(d);
+                let dir = Vec3::new(t.sin(), t.cos(), 0.3).normalize();
+                // Weak distance-2 couplings get lumped, the others stay.
+                let k = if d == 2 { 1e-6 } else { 1.0 };
+                let blk = Mat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z) * k;
+                a.add(i, i, blk);
+                a.add(j, j, blk);
+                a.add(i, j, -blk);
+                a.add(j, i, -blk);
+            }
+        }
+        a.add_diagonal(&vec![1e-2; n]);
+        let filter: Vec<Filter> = (0..n)
+            .map(|i| match i % 7 {
+                0 => Filter::Fixed,
+                3 => Filter::Direction(Vec3::new(0.6, 0.0, 0.8)),
+                _ => Filter::Free,
+            })
+            .collect();
+        let mut par = Csr::default();
+        par.filtered(&a, &filter);
+        let mut dnorm = Vec::new();
+        dnorm.extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
+        let (mut cols, mut vals, mut ends) = (Vec::new(), Vec::new(), vec![0]);
+        filter_rows(&a, &filter, &dnorm, 0..n, &mut cols, &mut vals, &mut ends);
+        assert_eq!(par.row_start, ends);
+        assert_eq!(par.cols, cols);
+        assert_eq!(par.vals, vals);
+        assert!(par.cols.len() < a.nnz_blocks(), "some blocks lumped");
+    }
 
     /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
     /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
