@@ -408,6 +408,12 @@ fn bits(v: &[Vec3]) -> &[u64] {
     unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), 3 * v.len()) }
 }
 
+/// The bit patterns of `f64` values, for exact comparison by `memcmp`.
+pub(crate) fn flat_bits(v: &[f64]) -> &[u64] {
+    // SAFETY: u64 has the size and alignment of f64 and every bit pattern is valid.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), v.len()) }
+}
+
 /// Mutable [`flat`].
 pub(crate) fn flat_mut(v: &mut [Vec3]) -> &mut [f64] {
     // SAFETY: as in `flat`; the result borrows `v` mutably and exclusively.
