@@ -6,6 +6,7 @@
 
 mod damping;
 mod gravity;
+pub(crate) mod pair;
 mod springs;
 mod stencils;
 mod wind;
@@ -323,7 +324,7 @@ impl EffectSet {
             let (xa, xb) = cache.x.split_at_mut(hi.start);
             let (f, half) = (&mut cache.f, &mut cache.half);
             let extra = &extra;
-            let (a, b) = rayon::join(
+            let (a, b) = pair::join(
                 || {
                     xa.copy_from_slice(&x[lo.clone()]);
                     (self.energy_part(x, f, 0, 2), extra(lo))

@@ -189,7 +189,7 @@ pub(super) fn split_update(x: &mut [Vec3], v: &mut [Vec3], body: &VertexUpdate) 
         let mid = n / 2;
         let (xa, xb) = x[..n].split_at_mut(mid);
         let (va, vb) = v[..n].split_at_mut(mid);
-        rayon::join(|| body(0..mid, xa, va), || body(mid..n, xb, vb));
+        crate::effects::pair::join(|| body(0..mid, xa, va), || body(mid..n, xb, vb));
     } else {
         body(0..n, &mut x[..n], &mut v[..n]);
     }
