@@ -21,7 +21,7 @@ use std::thread::Thread;
 use std::time::{Duration, Instant};
 
 /// How long the helper spins for the next job before parking.
-const SPIN: Duration = Duration::from_micros(200);
+const SPIN: Duration = Duration::from_micros(50);
 
 // Job slot states.
 const EMPTY: u8 = 0;
@@ -82,8 +82,7 @@ fn run(h: &'static Helper) {
     let mut polls = 0u32;
     loop {
         if h.state.load(Ordering::Acquire) == POSTED
-            && h
-                .state
+            && h.state
                 .compare_exchange(POSTED, TAKEN, Ordering::Acquire, Ordering::Relaxed)
                 .is_ok()
         {
@@ -95,11 +94,12 @@ fn run(h: &'static Helper) {
             }
             h.state.store(DONE, Ordering::Release);
             idle_since = Instant::now();
+            polls = 0;
             continue;
         }
         polls = polls.wrapping_add(1);
         if polls % 64 != 0 || idle_since.elapsed() < SPIN {
-            std::hint::spin_loop();
+            pause(polls);
             continue;
         }
         h.sleeping.store(true, Ordering::SeqCst);
@@ -108,6 +108,19 @@ fn run(h: &'static Helper) {
         }
         h.sleeping.store(false, Ordering::SeqCst);
         idle_since = Instant::now();
+        polls = 0;
+    }
+}
+
+/// One wait of a polling loop: a CPU pause for the first polls (an answer is due within
+/// microseconds), then a yield per poll, so that a poller sharing its core with the thread it
+/// waits for (or with other processes, on a loaded machine) does not eat that thread's time.
+#[inline]
+fn pause(polls: u32) {
+    if polls < 128 {
+        std::hint::spin_loop();
+    } else {
+        std::thread::yield_now();
     }
 }
 
@@ -120,8 +133,7 @@ where
     let Some(h) = helper() else {
         return (a(), b());
     };
-    if h
-        .state
+    if h.state
         .compare_exchange(EMPTY, WRITING, Ordering::Acquire, Ordering::Relaxed)
         .is_err()
     {
@@ -148,8 +160,7 @@ where
     }
     // `a` may panic: the job must be settled first, so catch and re-raise.
     let ra = catch_unwind(AssertUnwindSafe(a));
-    if h
-        .state
+    if h.state
         .compare_exchange(POSTED, WRITING, Ordering::Acquire, Ordering::Relaxed)
         .is_ok()
     {
@@ -162,12 +173,7 @@ where
         let mut spins = 0u32;
         while h.state.load(Ordering::Acquire) != DONE {
             spins = spins.wrapping_add(1);
-            if spins % 1024 == 0 {
-                // The helper was preempted mid-job: let it run.
-                std::thread::yield_now();
-            } else {
-                std::hint::spin_loop();
-            }
+            pause(spins);
         }
         let panicked = h.panicked.load(Ordering::Relaxed);
         // SAFETY: DONE: the helper no longer touches the slot.

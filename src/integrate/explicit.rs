@@ -21,6 +21,8 @@ pub type SymplecticEuler = Euler<true>;
 #[derive(Default)]
 pub struct Euler<const SYMPLECTIC: bool> {
     f: Vec<Vec3>,
+    /// The second part of split cached forces (see [`crate::effects::EffectSet::take_force_parts`]).
+    half: Vec<Vec3>,
     inv_mass: InverseMass,
     start: StartState,
 }
@@ -57,19 +59,23 @@ impl<const SYMPLECTIC: bool> Integrator for Euler<SYMPLECTIC> {
         x: &mut [Vec3],
         v: &mut [Vec3],
     ) -> IntegratorStats {
-        d.effects
-            .take_forces(&State { t, x: x0, v: v0 }, &mut self.f);
+        let split =
+            d.effects
+                .take_force_parts(&State { t, x: x0, v: v0 }, &mut self.f, &mut self.half);
         let inv_mass = self.inv_mass.of(d.mass);
         let (f, filter) = (&self.f[..], &d.constraints.filter[..]);
+        let half = split.then_some(&self.half[..]);
         split_update(x, v, &|r, x, v| {
             let n = x.len();
             let (f, filter, inv_mass) = (&f[r.clone()], &filter[r.clone()], &inv_mass[r.clone()]);
+            let half = half.map(|h| &h[r.clone()][..n]);
             let (x0, v0) = (&x0[r.clone()], &v0[r]);
             let ends = UpdateEnds { x, v: &mut v[..n] };
             let starts = UpdateStarts {
                 x0: &x0[..n],
                 v0: &v0[..n],
                 f: &f[..n],
+                half,
                 filter: &filter[..n],
                 inv_mass: &inv_mass[..n],
             };
@@ -98,6 +104,8 @@ struct UpdateStarts<'a> {
     x0: &'a [Vec3],
     v0: &'a [Vec3],
     f: &'a [Vec3],
+    /// Forces still to add to `f` (`f[i] + half[i]`), if any.
+    half: Option<&'a [Vec3]>,
     filter: &'a [Filter],
     inv_mass: &'a [f64],
 }
@@ -106,7 +114,11 @@ struct UpdateStarts<'a> {
 /// `x = x0 + v0 h` (forward).
 #[inline(always)]
 fn update_vertex<const SYMPLECTIC: bool>(e: &mut UpdateEnds, s: &UpdateStarts, i: usize, h: f64) {
-    let vi = s.v0[i] + s.filter[i].apply(s.f[i] * s.inv_mass[i]) * h;
+    let f = match s.half {
+        Some(half) => s.f[i] + half[i],
+        None => s.f[i],
+    };
+    let vi = s.v0[i] + s.filter[i].apply(f * s.inv_mass[i]) * h;
     e.x[i] = s.x0[i] + if SYMPLECTIC { vi } else { s.v0[i] } * h;
     e.v[i] = vi;
 }
@@ -136,6 +148,7 @@ unsafe fn update_avx2<const SYMPLECTIC: bool>(mut e: UpdateEnds, s: UpdateStarts
     use std::arch::x86_64::*;
     let n = e.x.len();
     let (x0, v0, f) = (flat(s.x0), flat(s.v0), flat(s.f));
+    let half = s.half.map(flat);
     let blocks = n / 4 * 4;
     let hv = _mm256_set1_pd(h);
     for b in (0..blocks).step_by(4) {
@@ -148,6 +161,7 @@ unsafe fn update_avx2<const SYMPLECTIC: bool>(mut e: UpdateEnds, s: UpdateStarts
         let (xe, ve) = (flat_mut(&mut e.x[b..b + 4]), flat_mut(&mut e.v[b..b + 4]));
         let c = 3 * b;
         let (x0, v0, f) = (&x0[c..c + 12], &v0[c..c + 12], &f[c..c + 12]);
+        let half = half.map(|h| &h[c..c + 12]);
         let m = &s.inv_mass[b..b + 4];
         // SAFETY: loads and stores of 4 elements at offsets 0, 4, 8 of 12-element slices, and
         // of the 4-element `m`.
@@ -162,7 +176,11 @@ unsafe fn update_avx2<const SYMPLECTIC: bool>(mut e: UpdateEnds, s: UpdateStarts
             for (q, mq) in ms.into_iter().enumerate() {
                 let o = 4 * q;
                 let v0q = _mm256_loadu_pd(v0.as_ptr().add(o));
-                let a = _mm256_mul_pd(_mm256_loadu_pd(f.as_ptr().add(o)), mq);
+                let mut fq = _mm256_loadu_pd(f.as_ptr().add(o));
+                if let Some(h) = half {
+                    fq = _mm256_add_pd(fq, _mm256_loadu_pd(h.as_ptr().add(o)));
+                }
+                let a = _mm256_mul_pd(fq, mq);
                 let vi = _mm256_add_pd(v0q, _mm256_mul_pd(a, hv));
                 let step = if SYMPLECTIC { vi } else { v0q };
                 let xi =
