@@ -147,7 +147,9 @@ fn fnv(h: &mut u64, values: impl IntoIterator<Item = f64>) {
 /// Runs a case; returns the hash of the final positions and velocities, the per-step kinetic
 /// energies and subdivision counts, and the total contact count seen.
 fn run(c: &Case) -> (u64, usize, u32) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config").join(c.file);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config")
+        .join(c.file);
     let mut s = Scene::load(&path).expect("bundled scene");
     s.cloths[0].grid.resolution = [c.res, c.res];
     if c.file == "sphere_drape.yaml" {

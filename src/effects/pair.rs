@@ -98,7 +98,7 @@ fn run(h: &'static Helper) {
             continue;
         }
         polls = polls.wrapping_add(1);
-        if polls % 64 != 0 || idle_since.elapsed() < SPIN {
+        if !polls.is_multiple_of(64) || idle_since.elapsed() < SPIN {
             pause(polls);
             continue;
         }
