@@ -327,3 +327,89 @@ impl<const N: usize> Effect for StencilSet<N> {
         StencilSet::stiffness(self, mass)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The former force pass: per chunk, one pass per stencil slot over its span.
+    fn per_slot_reference<const N: usize>(x: &[f64], f: &mut [f64], runs: &[Run<N>]) {
+        for run in runs {
+            let mut start = run.first;
+            while start < run.first + run.len {
+                let m = CHUNK.min(run.first + run.len - start);
+                let at = 3 * (start - run.first);
+                let span = |k: usize| 3 * run.idx[k] + at..3 * run.idx[k] + at + 3 * m;
+                let mut d = vec![0.0; 3 * m];
+                for (dj, &xj) in d.iter_mut().zip(&x[span(0)]) {
+                    *dj = 0.0 + xj * run.w[0];
+                }
+                for k in 1..N {
+                    for (dj, &xj) in d.iter_mut().zip(&x[span(k)]) {
+                        *dj += xj * run.w[k];
+                    }
+                }
+                for k in 0..N {
+                    let cw = run.c * run.w[k];
+                    for (fj, &dj) in f[span(k)].iter_mut().zip(&d) {
+                        *fj -= dj * cw;
+                    }
+                }
+                start += m;
+            }
+        }
+    }
+
+    /// Warp, weft and twist stencils of a 70 x 9 lattice (runs longer than a chunk, spans that
+    /// overlap within a chunk and spans apart): the one-pass-per-stretch forces are bitwise
+    /// those of the per-slot passes, for a nonzero starting force.
+    #[test]
+    fn one_pass_per_stretch_matches_per_slot_passes_bitwise() {
+        let (nu, nv) = (70usize, 9usize);
+        let id = |i: usize, j: usize| (j * nu + i) as u32;
+        let x: Vec<f64> = (0..3 * nu * nv)
+            .map(|k| ((k * 7919) % 1013) as f64 * 1e-3 - 0.4)
+            .collect();
+        let f0: Vec<f64> = (0..3 * nu * nv).map(|k| (k % 17) as f64 * 0.3).collect();
+        let mut bend = Vec::new();
+        for j in 0..nv {
+            for i in 1..nu - 1 {
+                bend.push(Stencil {
+                    idx: [id(i - 1, j), id(i, j), id(i + 1, j)],
+                    w: [1.3, -2.6, 1.3],
+                });
+            }
+        }
+        for j in 1..nv - 1 {
+            for i in 0..nu {
+                bend.push(Stencil {
+                    idx: [id(i, j - 1), id(i, j), id(i, j + 1)],
+                    w: [0.7, -1.4, 0.7],
+                });
+            }
+        }
+        let c = vec![0.37; bend.len()];
+        let r3 = runs(&bend, &c);
+        let mut twist = Vec::new();
+        for j in 0..nv - 1 {
+            for i in 0..nu - 1 {
+                twist.push(Stencil {
+                    idx: [id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)],
+                    w: [0.5, -0.5, -0.5, 0.5],
+                });
+            }
+        }
+        let r4 = runs(&twist, &vec![0.11; twist.len()]);
+        assert!(r3.iter().any(|r| r.len > CHUNK) && r4.len() > 1);
+
+        let (mut want, mut got) = (f0.clone(), f0.clone());
+        per_slot_reference(&x, &mut want, &r3);
+        runs_forces_energy(&x, &mut got, &r3, 0..bend.len());
+        assert_eq!(got, want);
+        let (mut want, mut got) = (f0.clone(), f0.clone());
+        per_slot_reference(&x, &mut want, &r4);
+        runs_forces_energy(&x, &mut got, &r4, 0..twist.len());
+        assert_eq!(got, want);
+        assert_ne!(got, f0);
+    }
+}
