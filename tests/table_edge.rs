@@ -42,7 +42,11 @@ collision: {{ mode: continuous }}
     let scene = Scene::from_yaml(&yaml, "table_edge").unwrap_or_else(|e| panic!("{e}"));
     let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
     let far_end = |sim: &drape::sim::Simulation| {
-        sim.cloth.x.iter().map(|p| p.x).fold(f64::INFINITY, f64::min)
+        sim.cloth
+            .x
+            .iter()
+            .map(|p| p.x)
+            .fold(f64::INFINITY, f64::min)
     };
     let start = far_end(&sim);
     for _ in 0..(seconds / sim.settings.dt).round() as usize {
