@@ -18,16 +18,7 @@ const BASE: &[EffectKind] = &[
     EffectKind::Bending,
 ];
 
-const ALL: &[EffectKind] = &[
-    EffectKind::Gravity,
-    EffectKind::Stretch,
-    EffectKind::Shear,
-    EffectKind::SkipOne,
-    EffectKind::Bending,
-    EffectKind::Twist,
-    EffectKind::Damping,
-    EffectKind::Wind,
-];
+const ALL: &[EffectKind] = &EffectKind::ALL;
 
 struct Case {
     name: &'static str,
