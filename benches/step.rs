@@ -63,16 +63,7 @@ fn integrators(c: &mut Criterion) {
 fn effects(c: &mut Criterion) {
     let mut g = c.benchmark_group("effects_64x64_symplectic");
     g.measurement_time(Duration::from_secs(3));
-    let all = [
-        EffectKind::Gravity,
-        EffectKind::Stretch,
-        EffectKind::Shear,
-        EffectKind::SkipOne,
-        EffectKind::Bending,
-        EffectKind::Twist,
-        EffectKind::Damping,
-        EffectKind::Wind,
-    ];
+    let all = EffectKind::ALL;
     for (name, list) in [
         (
             "gravity+springs",

@@ -394,6 +394,14 @@ impl CollisionStage {
         }
     }
 
+    /// The contacts sorted by vertex (contact order kept within a vertex), for the passes that
+    /// look at all of one vertex's contacts together.
+    fn contacts_by_vertex(&self) -> Vec<Contact> {
+        let mut by_vertex = self.contacts.clone();
+        by_vertex.sort_by_key(|c| c.vertex);
+        by_vertex
+    }
+
     /// A vertex touching two obstacles whose surfaces face each other closer than twice its
     /// thickness cannot be `thickness` away from both: projected out of one layer after the
     /// other, it ended inside the first obstacle's solid, and alternating projections step after
@@ -401,20 +409,15 @@ impl CollisionStage {
     /// the normal velocity of their mean. Returns the centred vertices with their new state.
     fn center_pinched(
         &self,
+        by_vertex: &[Contact],
         x0: &[Vec3],
         x1: &mut [Vec3],
         v1: &mut [Vec3],
         n: usize,
     ) -> Vec<(usize, Vec3, Vec3)> {
         let mut pinched = Vec::new();
-        let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
-            .contacts
-            .iter()
-            .map(|c| (c.vertex, c.obstacle, c.normal, c.surface_velocity))
-            .collect();
-        by_vertex.sort_by_key(|c| c.0);
-        for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
-            let i = group[0].0 as usize;
+        for group in by_vertex.chunk_by(|a, b| a.vertex == b.vertex) {
+            let i = group[0].vertex as usize;
             if group.len() < 2 || i >= n {
                 continue;
             }
@@ -422,7 +425,7 @@ impl CollisionStage {
             let mut best: Option<(f64, usize, usize)> = None;
             for a in 0..group.len() {
                 for b in a + 1..group.len() {
-                    let d = group[a].2.dot(group[b].2);
+                    let d = group[a].normal.dot(group[b].normal);
                     if d < -0.5 && best.is_none_or(|(bd, _, _)| d < bd) {
                         best = Some((d, a, b));
                     }
@@ -430,7 +433,7 @@ impl CollisionStage {
             }
             let Some((_, a, b)) = best else { continue };
             let distance = |k: usize| {
-                let o = &self.obstacles[group[k].1];
+                let o = &self.obstacles[group[k].obstacle];
                 let local = o.pose.inverse_transform_point(x1[i]);
                 let hint = o.pose_prev.inverse_transform_point(x0[i]);
                 o.closest_local(local, hint).signed_distance
@@ -441,13 +444,13 @@ impl CollisionStage {
                 continue;
             }
             // Along a's normal, the surfaces are da below and db above (opposed normals).
-            let na = group[a].2;
+            let na = group[a].normal;
             let gap = da + db;
             if gap >= 2.0 * th {
                 continue;
             }
             x1[i] += na * (0.5 * gap - da);
-            let vs = 0.5 * (group[a].3 + group[b].3).dot(na);
+            let vs = 0.5 * (group[a].surface_velocity + group[b].surface_velocity).dot(na);
             v1[i] += na * (vs - v1[i].dot(na));
             pinched.push((i, x1[i], v1[i]));
         }
@@ -462,6 +465,7 @@ impl CollisionStage {
     /// the wedge's normals); approaching normal velocity is removed for each surface on the way.
     fn separate_wedged(
         &self,
+        by_vertex: &[Contact],
         x0: &[Vec3],
         x1: &mut [Vec3],
         v1: &mut [Vec3],
@@ -469,14 +473,8 @@ impl CollisionStage {
         pinched: &[(usize, Vec3, Vec3)],
     ) {
         const ROUNDS: usize = 8;
-        let mut by_vertex: Vec<(u32, usize, Vec3, Vec3)> = self
-            .contacts
-            .iter()
-            .map(|c| (c.vertex, c.obstacle, c.normal, c.surface_velocity))
-            .collect();
-        by_vertex.sort_by_key(|c| c.0);
-        for group in by_vertex.chunk_by(|a, b| a.0 == b.0) {
-            let i = group[0].0 as usize;
+        for group in by_vertex.chunk_by(|a, b| a.vertex == b.vertex) {
+            let i = group[0].vertex as usize;
             // A pinched vertex (facing surfaces closer than two thicknesses) cannot leave both
             // layers: `center_pinched` put it midway.
             if group.len() < 2 || i >= n || pinched.iter().any(|p| p.0 == i) {
@@ -485,7 +483,12 @@ impl CollisionStage {
             let th = self.thickness[i];
             for _ in 0..ROUNDS {
                 let mut moved = false;
-                for &(_, oi, _, surface_velocity) in group {
+                for &Contact {
+                    obstacle: oi,
+                    surface_velocity,
+                    ..
+                } in group
+                {
                     let o = &self.obstacles[oi];
                     let local = o.pose.inverse_transform_point(x1[i]);
                     let hint = o.pose_prev.inverse_transform_point(x0[i]);
@@ -641,8 +644,9 @@ impl CollisionStage {
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
-        let pinched = self.center_pinched(x0, x1, v1, n);
-        self.separate_wedged(x0, x1, v1, n, &pinched);
+        let by_vertex = self.contacts_by_vertex();
+        let pinched = self.center_pinched(&by_vertex, x0, x1, v1, n);
+        self.separate_wedged(&by_vertex, x0, x1, v1, n, &pinched);
 
         let mut report = CollisionReport {
             culled,
@@ -694,8 +698,9 @@ impl CollisionStage {
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
-            let pinched = self.center_pinched(x0, x1, v1, n);
-            self.separate_wedged(x0, x1, v1, n, &pinched);
+            let by_vertex = self.contacts_by_vertex();
+            let pinched = self.center_pinched(&by_vertex, x0, x1, v1, n);
+            self.separate_wedged(&by_vertex, x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;
         self.held.clear();

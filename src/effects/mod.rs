@@ -6,6 +6,7 @@
 
 mod damping;
 mod gravity;
+pub(crate) mod pair;
 mod springs;
 mod stencils;
 mod wind;
@@ -127,6 +128,8 @@ struct PositionForces {
     f: Vec<Vec3>,
     /// The second half's forces when the pass is split across two threads.
     half: Vec<Vec3>,
+    /// `f` still lacks `half` (the sum is left to the consumer, which can do it in parallel).
+    split: bool,
     valid: bool,
 }
 
@@ -212,7 +215,11 @@ impl EffectSet {
         let cached = {
             let cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
             let hit = cache.hit(s.x);
-            if hit {
+            if hit && cache.split {
+                for ((o, a), b) in f.iter_mut().zip(&cache.f).zip(&cache.half) {
+                    *o = *a + *b;
+                }
+            } else if hit {
                 f.copy_from_slice(&cache.f);
             }
             hit
@@ -224,19 +231,54 @@ impl EffectSet {
     /// integrator): a cached result is handed over by swapping buffers instead of copied, which
     /// spends the cache. `f` is resized to the vertex count.
     pub fn take_forces(&self, s: &State, f: &mut Vec<Vec3>) {
-        let cached = {
+        let mut half = Vec::new();
+        if self.take_force_parts(s, f, &mut half) {
+            for (a, b) in f.iter_mut().zip(&half) {
+                *a += *b;
+            }
+            self.return_half(half);
+        }
+    }
+
+    /// [`EffectSet::take_forces`] that may leave the last step of the cached sum to the caller:
+    /// when it returns true, the forces are `f + half` (each vertex summed as `f[i] + half[i]`),
+    /// which the caller adds where it reads them, e.g. split across its own threads. Hand `half`
+    /// back with [`EffectSet::return_half`] to spare the next pass an allocation.
+    pub fn take_force_parts(&self, s: &State, f: &mut Vec<Vec3>, half: &mut Vec<Vec3>) -> bool {
+        let (cached, split) = {
             let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
             let hit = cache.hit(s.x);
+            let split = hit && cache.split;
             if hit {
                 std::mem::swap(&mut cache.f, f);
                 cache.valid = false;
             }
-            hit
+            if split {
+                std::mem::swap(&mut cache.half, half);
+            }
+            (hit, split)
         };
         if !cached {
             crate::integrate::scratch(f, s.x.len());
         }
+        if split && self.effects.iter().any(|e| !e.position_only()) {
+            // Velocity-dependent effects add to the full sum, in the order of a plain pass.
+            for (a, b) in f.iter_mut().zip(half.iter()) {
+                *a += *b;
+            }
+            self.add_uncached(s, f, cached);
+            return false;
+        }
         self.add_uncached(s, f, cached);
+        split
+    }
+
+    /// Gives a buffer taken by [`EffectSet::take_force_parts`] back to the cache.
+    pub fn return_half(&self, mut half: Vec<Vec3>) {
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        if cache.half.capacity() < half.capacity() {
+            std::mem::swap(&mut cache.half, &mut half);
+        }
     }
 
     /// Completes `f` with the effects the cache does not hold (all of them, zeroing `f` first,
@@ -323,7 +365,7 @@ impl EffectSet {
             let (xa, xb) = cache.x.split_at_mut(hi.start);
             let (f, half) = (&mut cache.f, &mut cache.half);
             let extra = &extra;
-            let (a, b) = rayon::join(
+            let (a, b) = pair::join(
                 || {
                     xa.copy_from_slice(&x[lo.clone()]);
                     (self.energy_part(x, f, 0, 2), extra(lo))
@@ -333,9 +375,7 @@ impl EffectSet {
                     (self.energy_part(x, half, 1, 2), extra(hi))
                 },
             );
-            for (f, h) in cache.f.iter_mut().zip(&cache.half) {
-                *f += *h;
-            }
+            // The halves' sum is left to the consumer (see `PositionForces::split`).
             ((a.0 .0 + b.0 .0, a.0 .1 + b.0 .1), a.1, Some(b.1))
         } else {
             cache.x.clear();
@@ -348,6 +388,7 @@ impl EffectSet {
                 c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             }
         }
+        cache.split = n >= PAR_VERTICES;
         cache.valid = true;
         (energies, first, second)
     }
@@ -406,6 +447,12 @@ pub(crate) fn flat(v: &[Vec3]) -> &[f64] {
 fn bits(v: &[Vec3]) -> &[u64] {
     // SAFETY: as in `flat`; u64 has the size and alignment of f64 and every bit pattern is valid.
     unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), 3 * v.len()) }
+}
+
+/// The bit patterns of `f64` values, for exact comparison by `memcmp`.
+pub(crate) fn flat_bits(v: &[f64]) -> &[u64] {
+    // SAFETY: u64 has the size and alignment of f64 and every bit pattern is valid.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u64>(), v.len()) }
 }
 
 /// Mutable [`flat`].

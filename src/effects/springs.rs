@@ -97,43 +97,73 @@ unsafe fn forces_energy_avx2(x: &[Vec3], f: &mut [Vec3], springs: &[Spring], k: 
     use std::arch::x86_64::*;
     let mut energy = _mm256_setzero_pd();
     let (zero, half) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5));
+    // Components as flat f64: vertex `v` is at `3 v`, its (x, y) pair loads as one 128-bit value.
+    let xp = x.as_ptr().cast::<f64>();
+    let fp = f.as_mut_ptr().cast::<f64>();
     for (sb, kb) in springs.chunks_exact(LANES).zip(k.chunks_exact(LANES)) {
-        let (mut dx, mut dy, mut dz, mut rest) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
-        for l in 0..LANES {
-            let s = &sb[l];
-            // SAFETY: indices below x.len() (function contract).
-            let d = unsafe { *x.get_unchecked(s.i as usize) - *x.get_unchecked(s.j as usize) };
-            (dx[l], dy[l], dz[l], rest[l]) = (d.x, d.y, d.z, s.rest);
-        }
-        let mut scale = [0.0; 4];
-        // SAFETY: unaligned loads and stores of local 4-element arrays.
+        let ii: [usize; LANES] = std::array::from_fn(|l| 3 * sb[l].i as usize);
+        let jj: [usize; LANES] = std::array::from_fn(|l| 3 * sb[l].j as usize);
+        // SAFETY: every `3 i + 2`, `3 j + 2` is inside `x` and `f` (indices below their lengths,
+        // function contract); the loads and stores below touch only those components.
         unsafe {
-            let (vx, vy, vz) = (
-                _mm256_loadu_pd(dx.as_ptr()),
-                _mm256_loadu_pd(dy.as_ptr()),
-                _mm256_loadu_pd(dz.as_ptr()),
-            );
+            // d = x_i - x_j per spring, as (x, y) pairs and z scalars, then transposed to one
+            // vector per component with the springs in lane order.
+            let dxy: [__m128d; LANES] = std::array::from_fn(|l| {
+                _mm_sub_pd(_mm_loadu_pd(xp.add(ii[l])), _mm_loadu_pd(xp.add(jj[l])))
+            });
+            let dz: [__m128d; LANES] = std::array::from_fn(|l| {
+                _mm_sub_sd(
+                    _mm_load_sd(xp.add(ii[l] + 2)),
+                    _mm_load_sd(xp.add(jj[l] + 2)),
+                )
+            });
+            let pair =
+                |a: __m128d, b: __m128d| _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(a), b);
+            let (t02, t13) = (pair(dxy[0], dxy[2]), pair(dxy[1], dxy[3]));
+            let vx = _mm256_unpacklo_pd(t02, t13);
+            let vy = _mm256_unpackhi_pd(t02, t13);
+            let vz = pair(_mm_unpacklo_pd(dz[0], dz[1]), _mm_unpacklo_pd(dz[2], dz[3]));
             let kv = _mm256_loadu_pd(kb.as_ptr());
+            let rest = _mm256_set_pd(sb[3].rest, sb[2].rest, sb[1].rest, sb[0].rest);
             let len2 = _mm256_add_pd(
                 _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
                 _mm256_mul_pd(vz, vz),
             );
             let len = _mm256_sqrt_pd(len2);
-            let e = _mm256_sub_pd(len, _mm256_loadu_pd(rest.as_ptr()));
+            let e = _mm256_sub_pd(len, rest);
             // -k e / len, zeroed where len = 0 (coincident endpoints: no direction, no force).
             let q = _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(zero, kv), e), len);
             let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(len, zero);
-            _mm256_storeu_pd(scale.as_mut_ptr(), _mm256_and_pd(q, positive));
+            let scale = _mm256_and_pd(q, positive);
             let el = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, kv), e), e);
             energy = _mm256_add_pd(energy, el);
-        }
-        for l in 0..LANES {
-            let s = &sb[l];
-            let fi = Vec3::new(dx[l] * scale[l], dy[l] * scale[l], dz[l] * scale[l]);
-            // SAFETY: indices below f.len() (function contract).
-            unsafe {
-                *f.get_unchecked_mut(s.i as usize) += fi;
-                *f.get_unchecked_mut(s.j as usize) -= fi;
+            // f_i = d scale, back to (x, y) pairs and z scalars per spring.
+            let (fx, fy, fz) = (
+                _mm256_mul_pd(vx, scale),
+                _mm256_mul_pd(vy, scale),
+                _mm256_mul_pd(vz, scale),
+            );
+            let (lo, hi) = (_mm256_unpacklo_pd(fx, fy), _mm256_unpackhi_pd(fx, fy));
+            let fxy = [
+                _mm256_castpd256_pd128(lo),
+                _mm256_castpd256_pd128(hi),
+                _mm256_extractf128_pd::<1>(lo),
+                _mm256_extractf128_pd::<1>(hi),
+            ];
+            let (z01, z23) = (_mm256_castpd256_pd128(fz), _mm256_extractf128_pd::<1>(fz));
+            let fzs = [
+                z01,
+                _mm_unpackhi_pd(z01, z01),
+                z23,
+                _mm_unpackhi_pd(z23, z23),
+            ];
+            // Scatter in spring order: f_i += f, f_j -= f.
+            for l in 0..LANES {
+                let (pi, pj) = (fp.add(ii[l]), fp.add(jj[l]));
+                _mm_storeu_pd(pi, _mm_add_pd(_mm_loadu_pd(pi), fxy[l]));
+                _mm_store_sd(pi.add(2), _mm_add_sd(_mm_load_sd(pi.add(2)), fzs[l]));
+                _mm_storeu_pd(pj, _mm_sub_pd(_mm_loadu_pd(pj), fxy[l]));
+                _mm_store_sd(pj.add(2), _mm_sub_sd(_mm_load_sd(pj.add(2)), fzs[l]));
             }
         }
     }

@@ -176,7 +176,8 @@ const CHUNK: usize = 64;
 /// Forces and energy of the stencils with indices in `range`, run by run, on flat positions `x`
 /// and forces `f`. Per stencil the arithmetic is that of the plain loop (`d = sum w_k x_k` in
 /// order, `f_k -= d (c w_k)`); only the order in which contributions reach a vertex, and the
-/// energy's summation order, differ.
+/// energy's summation order, differ. That order is fixed by the chunks: within a chunk, a force
+/// component receives its terms in ascending `k`, chunk after chunk.
 #[inline(always)]
 fn runs_forces_energy<const N: usize>(
     x: &[f64],
@@ -194,23 +195,19 @@ fn runs_forces_energy<const N: usize>(
         while start < hi {
             let m = CHUNK.min(hi - start);
             let (d, at) = (&mut d[..3 * m], 3 * (start - run.first));
-            let span = |k: usize| 3 * run.idx[k] + at..3 * run.idx[k] + at + 3 * m;
-            let x0 = &x[span(0)];
-            for (dj, &xj) in d.iter_mut().zip(x0) {
-                *dj = 0.0 + xj * run.w[0];
-            }
-            for k in 1..N {
-                let wk = run.w[k];
-                for (dj, &xj) in d.iter_mut().zip(&x[span(k)]) {
-                    *dj += xj * wk;
+            // Flat index of the chunk's first component in each stencil slot's span.
+            let base = run.idx.map(|i| 3 * i + at);
+            let xs = base.map(|b| &x[b..b + 3 * m]);
+            // d = ((0 + w0 x0) + w1 x1) + ..., one pass.
+            for (j, dj) in d.iter_mut().enumerate() {
+                let mut acc = 0.0 + xs[0][j] * run.w[0];
+                for k in 1..N {
+                    acc += xs[k][j] * run.w[k];
                 }
+                *dj = acc;
             }
-            for k in 0..N {
-                let cw = run.c * run.w[k];
-                for (fj, &dj) in f[span(k)].iter_mut().zip(d.iter()) {
-                    *fj -= dj * cw;
-                }
-            }
+            let cw = run.w.map(|w| run.c * w);
+            subtract_spans(f, d, &base, &cw);
             let mut sq = [0.0; 4];
             let quads = d.chunks_exact(4);
             let rest: f64 = quads.remainder().iter().map(|v| v * v).sum();
@@ -224,6 +221,78 @@ fn runs_forces_energy<const N: usize>(
         }
     }
     energy
+}
+
+/// `f[base[k] + j] -= d[j] * cw[k]` for every slot `k` and `j < d.len()`, with the terms of
+/// each component of `f` applied in ascending `k` (as `N` passes one slot after the other would),
+/// but in one pass per stretch of `f` that the same slots cover: each component is loaded and
+/// stored once, instead of once per slot through overlapping spans (whose stores the next
+/// slot's loads would wait on).
+#[inline(always)]
+fn subtract_spans<const N: usize>(f: &mut [f64], d: &[f64], base: &[usize; N], cw: &[f64; N]) {
+    let len = d.len();
+    // Stretches between consecutive span ends; each is covered by a fixed set of slots.
+    let mut cuts = [0usize; 8];
+    for k in 0..N {
+        (cuts[2 * k], cuts[2 * k + 1]) = (base[k], base[k] + len);
+    }
+    let cuts = &mut cuts[..2 * N];
+    cuts.sort_unstable();
+    for w in cuts.windows(2) {
+        let (s, e) = (w[0], w[1]);
+        if s == e {
+            continue;
+        }
+        let mut mask = 0u32;
+        for k in 0..N {
+            if base[k] <= s && e <= base[k] + len {
+                mask |= 1 << k;
+            }
+        }
+        if mask == 0 {
+            // A gap between spans (the stretch may be longer than `d`).
+            continue;
+        }
+        let fs = &mut f[s..e];
+        // The slots' differences over this stretch (unused slots get any slice of that length: a covered stretch is no longer than `d`).
+        let ds: [&[f64]; N] = std::array::from_fn(|k| {
+            if mask & (1 << k) != 0 {
+                &d[s - base[k]..e - base[k]]
+            } else {
+                &d[..e - s]
+            }
+        });
+        macro_rules! dispatch {
+            ($($m:literal)*) => {
+                match mask {
+                    $($m => subtract_stretch::<N, $m>(fs, &ds, cw),)*
+                    _ => {}
+                }
+            };
+        }
+        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+    }
+}
+
+/// `fs[j] -= ds[k][j] * cw[k]` for the slots `k` in `MASK`, in ascending `k` (all `ds[k]` as
+/// long as `fs`).
+#[inline(always)]
+fn subtract_stretch<const N: usize, const MASK: u32>(
+    fs: &mut [f64],
+    ds: &[&[f64]; N],
+    cw: &[f64; N],
+) {
+    let n = fs.len();
+    let ds: [&[f64]; N] = ds.map(|d| &d[..n]);
+    for j in 0..n {
+        let mut a = fs[j];
+        for k in 0..N {
+            if MASK & (1 << k) != 0 {
+                a -= ds[k][j] * cw[k];
+            }
+        }
+        fs[j] = a;
+    }
 }
 
 impl<const N: usize> Effect for StencilSet<N> {
@@ -256,5 +325,91 @@ impl<const N: usize> Effect for StencilSet<N> {
     }
     fn stiffness(&self, mass: &[f64]) -> Option<StiffnessBound> {
         StencilSet::stiffness(self, mass)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The former force pass: per chunk, one pass per stencil slot over its span.
+    fn per_slot_reference<const N: usize>(x: &[f64], f: &mut [f64], runs: &[Run<N>]) {
+        for run in runs {
+            let mut start = run.first;
+            while start < run.first + run.len {
+                let m = CHUNK.min(run.first + run.len - start);
+                let at = 3 * (start - run.first);
+                let span = |k: usize| 3 * run.idx[k] + at..3 * run.idx[k] + at + 3 * m;
+                let mut d = vec![0.0; 3 * m];
+                for (dj, &xj) in d.iter_mut().zip(&x[span(0)]) {
+                    *dj = 0.0 + xj * run.w[0];
+                }
+                for k in 1..N {
+                    for (dj, &xj) in d.iter_mut().zip(&x[span(k)]) {
+                        *dj += xj * run.w[k];
+                    }
+                }
+                for k in 0..N {
+                    let cw = run.c * run.w[k];
+                    for (fj, &dj) in f[span(k)].iter_mut().zip(&d) {
+                        *fj -= dj * cw;
+                    }
+                }
+                start += m;
+            }
+        }
+    }
+
+    /// Warp, weft and twist stencils of a 70 x 9 lattice (runs longer than a chunk, spans that
+    /// overlap within a chunk and spans apart): the one-pass-per-stretch forces are bitwise
+    /// those of the per-slot passes, for a nonzero starting force.
+    #[test]
+    fn one_pass_per_stretch_matches_per_slot_passes_bitwise() {
+        let (nu, nv) = (70usize, 9usize);
+        let id = |i: usize, j: usize| (j * nu + i) as u32;
+        let x: Vec<f64> = (0..3 * nu * nv)
+            .map(|k| ((k * 7919) % 1013) as f64 * 1e-3 - 0.4)
+            .collect();
+        let f0: Vec<f64> = (0..3 * nu * nv).map(|k| (k % 17) as f64 * 0.3).collect();
+        let mut bend = Vec::new();
+        for j in 0..nv {
+            for i in 1..nu - 1 {
+                bend.push(Stencil {
+                    idx: [id(i - 1, j), id(i, j), id(i + 1, j)],
+                    w: [1.3, -2.6, 1.3],
+                });
+            }
+        }
+        for j in 1..nv - 1 {
+            for i in 0..nu {
+                bend.push(Stencil {
+                    idx: [id(i, j - 1), id(i, j), id(i, j + 1)],
+                    w: [0.7, -1.4, 0.7],
+                });
+            }
+        }
+        let c = vec![0.37; bend.len()];
+        let r3 = runs(&bend, &c);
+        let mut twist = Vec::new();
+        for j in 0..nv - 1 {
+            for i in 0..nu - 1 {
+                twist.push(Stencil {
+                    idx: [id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)],
+                    w: [0.5, -0.5, -0.5, 0.5],
+                });
+            }
+        }
+        let r4 = runs(&twist, &vec![0.11; twist.len()]);
+        assert!(r3.iter().any(|r| r.len > CHUNK) && r4.len() > 1);
+
+        let (mut want, mut got) = (f0.clone(), f0.clone());
+        per_slot_reference(&x, &mut want, &r3);
+        runs_forces_energy(&x, &mut got, &r3, 0..bend.len());
+        assert_eq!(got, want);
+        let (mut want, mut got) = (f0.clone(), f0.clone());
+        per_slot_reference(&x, &mut want, &r4);
+        runs_forces_energy(&x, &mut got, &r4, 0..twist.len());
+        assert_eq!(got, want);
+        assert_ne!(got, f0);
     }
 }

@@ -44,6 +44,21 @@ pub enum EffectKind {
     Damping,
 }
 
+impl EffectKind {
+    /// Every effect, in the order the benchmarks and the bitwise step tests list them (the
+    /// order effects are built in is the order their forces are summed in).
+    pub const ALL: [EffectKind; 8] = [
+        EffectKind::Gravity,
+        EffectKind::Stretch,
+        EffectKind::Shear,
+        EffectKind::SkipOne,
+        EffectKind::Bending,
+        EffectKind::Twist,
+        EffectKind::Damping,
+        EffectKind::Wind,
+    ];
+}
+
 pub use crate::collide::PoseSpec;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -1,0 +1,196 @@
+//! The explicit step's speed work must not change a single bit of the physics: trajectories of a
+//! few hundred explicit steps (sequential and two-thread sizes, every explicit integrator, the
+//! velocity-dependent and energy-injecting effects, the guard's subdivision and a contact scene)
+//! hash to the values recorded on the build before the optimisations (main at 50c56f8).
+//!
+//! A mismatch means rounding changed somewhere in the force, update or guard path; since contact
+//! scenes are chaotic, that would flip unrelated round-off-sensitive tests. To re-record after a
+//! deliberate physics change, run with `--nocapture` and copy the printed table.
+
+use drape::integrate::IntegratorKind;
+use drape::scene::{EffectKind, Scene};
+use std::path::Path;
+
+const BASE: &[EffectKind] = &[
+    EffectKind::Gravity,
+    EffectKind::Stretch,
+    EffectKind::Shear,
+    EffectKind::Bending,
+];
+
+const ALL: &[EffectKind] = &EffectKind::ALL;
+
+struct Case {
+    name: &'static str,
+    file: &'static str,
+    res: usize,
+    kind: IntegratorKind,
+    effects: &'static [EffectKind],
+    dt: f64,
+    substeps: u32,
+    steps: usize,
+}
+
+const CASES: &[Case] = &[
+    // The benchmark's configuration, on two threads (4096 vertices) and on one (1024).
+    Case {
+        name: "hanging64_symplectic_base",
+        file: "hanging.yaml",
+        res: 64,
+        kind: IntegratorKind::SymplecticEuler,
+        effects: BASE,
+        dt: 1e-5,
+        substeps: 1,
+        steps: 300,
+    },
+    Case {
+        name: "hanging32_symplectic_base",
+        file: "hanging.yaml",
+        res: 32,
+        kind: IntegratorKind::SymplecticEuler,
+        effects: BASE,
+        dt: 1e-5,
+        substeps: 1,
+        steps: 300,
+    },
+    // Every effect, wind's external work in the guard, two substeps per frame.
+    Case {
+        name: "hanging64_symplectic_all",
+        file: "hanging.yaml",
+        res: 64,
+        kind: IntegratorKind::SymplecticEuler,
+        effects: ALL,
+        dt: 2e-5,
+        substeps: 2,
+        steps: 150,
+    },
+    Case {
+        name: "hanging64_explicit_all",
+        file: "hanging.yaml",
+        res: 64,
+        kind: IntegratorKind::ExplicitEuler,
+        effects: ALL,
+        dt: 1e-5,
+        substeps: 1,
+        steps: 200,
+    },
+    Case {
+        name: "hanging48_rk4_all",
+        file: "hanging.yaml",
+        res: 48,
+        kind: IntegratorKind::Rk4,
+        effects: ALL,
+        dt: 2e-5,
+        substeps: 1,
+        steps: 100,
+    },
+    // A step over the stability limit: the guard halves it (subdivision path).
+    Case {
+        name: "hanging32_symplectic_subdivided",
+        file: "hanging.yaml",
+        res: 32,
+        kind: IntegratorKind::SymplecticEuler,
+        effects: BASE,
+        dt: 1e-3,
+        substeps: 1,
+        steps: 20,
+    },
+    // Contacts with a sphere (continuous collision) from the first steps on.
+    Case {
+        name: "sphere32_symplectic_contact",
+        file: "sphere_drape.yaml",
+        res: 32,
+        kind: IntegratorKind::SymplecticEuler,
+        effects: &[
+            EffectKind::Gravity,
+            EffectKind::Stretch,
+            EffectKind::Shear,
+            EffectKind::Bending,
+            EffectKind::Damping,
+        ],
+        dt: 2e-4,
+        substeps: 1,
+        steps: 300,
+    },
+];
+
+/// Hashes recorded before the speed work, in `CASES` order.
+const EXPECTED: &[(&str, u64)] = &[
+    ("hanging64_symplectic_base", 0x7c4b3ee4fc6734f9),
+    ("hanging32_symplectic_base", 0xc8a862d15dfdf111),
+    ("hanging64_symplectic_all", 0x61880a484db0ab19),
+    ("hanging64_explicit_all", 0x853b7152ec85c602),
+    ("hanging48_rk4_all", 0xb15148c1b6b7144f),
+    ("hanging32_symplectic_subdivided", 0x7aee1c713d3069ea),
+    ("sphere32_symplectic_contact", 0x83591e2ae291daf1),
+];
+
+/// FNV-1a over the bit patterns of the values.
+fn fnv(h: &mut u64, values: impl IntoIterator<Item = f64>) {
+    for v in values {
+        for b in v.to_bits().to_le_bytes() {
+            *h ^= b as u64;
+            *h = h.wrapping_mul(0x100_0000_01b3);
+        }
+    }
+}
+
+/// Runs a case; returns the hash of the final positions and velocities, the per-step kinetic
+/// energies and subdivision counts, and the total contact count seen.
+fn run(c: &Case) -> (u64, usize, u32) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config")
+        .join(c.file);
+    let mut s = Scene::load(&path).expect("bundled scene");
+    s.cloths[0].grid.resolution = [c.res, c.res];
+    if c.file == "sphere_drape.yaml" {
+        // Start resting on the ball's thickness layer, so contacts begin at once.
+        s.cloths[0].grid.pose.xyz[2] = 0.605;
+    }
+    s.effects = c.effects.to_vec();
+    s.solver.integrator = c.kind;
+    s.solver.dt = c.dt;
+    s.solver.substeps = c.substeps;
+    s.cloths[0].material.skip_one = 500.0;
+    if c.effects.contains(&EffectKind::Wind) {
+        s.wind = Some(serde_yaml_ng::from_str("velocity: [3.0, 1.0, 0.5]").expect("wind"));
+    }
+    let mut sim = s.build().expect("valid scene");
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let (mut contacts, mut subdivisions) = (0, 0);
+    for _ in 0..c.steps {
+        let m = sim.step().expect("stable");
+        contacts += m.contacts;
+        subdivisions += m.subdivisions;
+        fnv(&mut h, [m.kinetic_energy, m.potential_energy, m.max_speed]);
+    }
+    let x = sim.cloth.x.iter().flat_map(|p| p.to_array());
+    let v = sim.cloth.v.iter().flat_map(|p| p.to_array());
+    fnv(&mut h, x.chain(v));
+    (h, contacts, subdivisions)
+}
+
+#[test]
+fn explicit_trajectories_are_bitwise_those_before_the_speed_work() {
+    let mut table = String::new();
+    let mut mismatches = Vec::new();
+    for (k, c) in CASES.iter().enumerate() {
+        let (h, contacts, subdivisions) = run(c);
+        table += &format!("    (\"{}\", 0x{h:016x}),\n", c.name);
+        if c.name.starts_with("sphere") {
+            assert!(contacts > 0, "{}: the contact case made no contact", c.name);
+        }
+        if c.name.ends_with("subdivided") {
+            assert!(subdivisions > 0, "{}: the guard never subdivided", c.name);
+        }
+        match EXPECTED.get(k) {
+            Some(&(name, want)) if name == c.name && want == h => {}
+            _ => mismatches.push(c.name),
+        }
+    }
+    println!("const EXPECTED: &[(&str, u64)] = &[\n{table}];");
+    assert!(
+        mismatches.is_empty(),
+        "trajectories differ from the recorded ones: {mismatches:?}"
+    );
+}
