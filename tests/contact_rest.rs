@@ -110,56 +110,43 @@ fn strap(integrator: IntegratorKind, mode: DetectionMode, response: ResponseMode
     r
 }
 
-/// Without obstacle features (spheres mode) and with the projection response the strap comes
-/// fully to rest. With the filter (`Both`) it failed before the resting band (contacts dropped
-/// every other step: 124 vertices above 1 cm/s, ke 2.9e-6 J); it now plateaus at ~3.5e-8 J with
-/// two vertices near a side face, just outside the contact band, in a period-2 cycle at 2 cm/s
-/// (measured to 8 s), a known gap checked by the ignored test below.
+/// The full acceptance with the implicit solver: every detection mode and response comes to
+/// strict rest. With the filter in spheres mode the strap used to stay in a period-2 cycle at
+/// 2 cm/s (two vertices just outside the contact band). Before box edges were springs inside the solve, the filter with box-edge features
+/// crept (the edge's push by position after the solve, undone by the next solve) and projection
+/// kept ~1e-7 J at up to 0.15 m/s.
 #[test]
-fn strap_on_box_comes_to_rest_in_spheres_mode() {
-    let r = strap(
-        IntegratorKind::Implicit,
+fn strap_over_box_edges_comes_to_rest_with_the_implicit_solver() {
+    for mode in [
+        DetectionMode::Continuous,
+        DetectionMode::Proximity,
         DetectionMode::Spheres,
-        ResponseMode::Projection,
-    );
-    assert_strict("spheres Projection", &r);
-    assert!(r.contacts > 20, "strap not on the box");
-}
-
-/// With box-edge features and the projection response the edge contacts no longer pump energy:
-/// before the per-vertex feature response the strap kept 3e-5 J (continuous) / 3e-6 J
-/// (proximity) and 0.52 / 0.16 m/s. The remaining creep (~1e-7 J, < 5 cm/s) is a known gap,
-/// so the bound here is 1e-6 J and 0.1 m/s, not the strict one.
-#[test]
-fn strap_over_box_edges_stops_pumping_with_projection() {
-    for mode in [DetectionMode::Continuous, DetectionMode::Proximity] {
-        let r = strap(IntegratorKind::Implicit, mode, ResponseMode::Projection);
-        assert!(r.ke < 1e-6, "{mode:?}: ke {:.3e} J", r.ke);
-        assert!(
-            r.speed_tail < 0.1,
-            "{mode:?}: speed {:.3e} m/s",
-            r.speed_tail
-        );
-        assert!(r.contacts > 20, "{mode:?}: strap not on the box");
+    ] {
+        for response in [ResponseMode::Both, ResponseMode::Projection] {
+            let r = strap(IntegratorKind::Implicit, mode, response);
+            assert_strict(&format!("Implicit {mode:?} {response:?}"), &r);
+            assert!(
+                r.contacts > 10,
+                "{mode:?} {response:?}: strap not on the box"
+            );
+        }
     }
 }
 
-/// The full acceptance: every detection mode and response, implicit and symplectic Euler.
-/// Known to fail (see the report): filter + box-edge features still creep, and symplectic Euler
-/// at this stiffness does not settle even without features.
+/// Symplectic Euler (40 substeps) does not settle at this stiffness even without features:
+/// 1.6e-7 J and 7 vertices above 1 cm/s in continuous mode, where the bound is 2.4e-8 J. Its
+/// contacts are answered only after the step, by position (it has no solve to take them).
 #[test]
-#[ignore = "known gap: filter with box-edge features, and symplectic Euler, do not settle yet"]
-fn strap_over_box_edges_comes_to_rest_everywhere() {
-    for integrator in [IntegratorKind::Implicit, IntegratorKind::SymplecticEuler] {
-        for mode in [
-            DetectionMode::Continuous,
-            DetectionMode::Proximity,
-            DetectionMode::Spheres,
-        ] {
-            for response in [ResponseMode::Both, ResponseMode::Projection] {
-                let r = strap(integrator, mode, response);
-                assert_strict(&format!("{integrator:?} {mode:?} {response:?}"), &r);
-            }
+#[ignore = "known gap: symplectic Euler's post-step contact response keeps the strap moving"]
+fn strap_over_box_edges_comes_to_rest_with_symplectic_euler() {
+    for mode in [
+        DetectionMode::Continuous,
+        DetectionMode::Proximity,
+        DetectionMode::Spheres,
+    ] {
+        for response in [ResponseMode::Both, ResponseMode::Projection] {
+            let r = strap(IntegratorKind::SymplecticEuler, mode, response);
+            assert_strict(&format!("SymplecticEuler {mode:?} {response:?}"), &r);
         }
     }
 }
