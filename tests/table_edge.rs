@@ -76,11 +76,10 @@ fn a_strip_with_little_hanging_stays_on_the_table() {
 /// alone must not hold it. This checks the verdict (the far end passes the edge: the strip left
 /// the table), not the speed: an ideal string hanging 30 % would be off in 0.6 s
 /// (`l = 0.3 cosh(sqrt(g / L) t)`), ~1 s with the fall of the part that starts level with the
-/// table; measured 2.5 s (the README's known limits: 2.5 cm segments over a 4 mm thick wrap
-/// slide in jerks, and backward Euler at 120 Hz damps the swing).
+/// table; measured 1.4 s.
 #[test]
 fn a_frictionless_strip_slides_off_the_table() {
-    let (_, farthest) = strip(0.3, 0.0, 3.5);
+    let (_, farthest) = strip(0.3, 0.0, 3.0);
     assert!(
         farthest > on_table(0.3),
         "far end got {farthest:.4} m of {:.2} m",
@@ -89,16 +88,16 @@ fn a_frictionless_strip_slides_off_the_table() {
 }
 
 /// 45 % hanging at mu 0.2: pull `0.45 exp(-0.1 pi) = 0.33` against `mu (L - l) = 0.11`, so the
-/// strip accelerates at about `g (0.33 - 0.11) / L = 2 m/s^2` and is off the table in ~1 s.
-/// Known gap (issue 7): it sticks for seconds at the edge (4 cm in, for 2 s; it then creeps and
-/// leaves after 3-4 s, chaotically). Measured cause: the 2.5 cm segment over the edge is a
-/// lever whose tip (the strip's bend, a vertex at least the 4 mm thickness beyond the edge)
-/// carries the hanging part; a string bent at the edge itself has no such lever. Finer strips
-/// (6 mm segments) creep too, so resolution alone does not remove it.
+/// strip slides off: an ideal string would accelerate at about `g (0.33 - 0.11) / L = 2 m/s^2`
+/// and be off in ~1 s after the hanging part's fall. Measured 2.3 s: the strip slides at a near
+/// steady 0.3 m/s, the coarse strip (2.5 cm segments) flapping on the table next to the edge,
+/// where its landings take about half the work gravity does (README, known limits). It used to
+/// stick for good: the edge's push by position stretched the strip over the edge (4.7 N of
+/// tension against 0.09 N of hanging weight) and the filter glued the lifted vertex next to the
+/// edge to the table. The verdict is what this checks, with 3 s to reach it.
 #[test]
-#[ignore = "known gap (issue 7): a coarse strip bent over a sharp edge sticks where Coulomb lets it slide"]
 fn a_strip_with_a_heavy_hanging_part_slides_off_the_table() {
-    let (_, farthest) = strip(0.45, MU, 2.0);
+    let (_, farthest) = strip(0.45, MU, 3.0);
     assert!(
         farthest > on_table(0.45),
         "far end got {farthest:.4} m of {:.2} m",

@@ -283,7 +283,7 @@ pub struct FeatureContact {
 /// edge: the solver moves the segment's vertices with their neighbours and the push moves only
 /// them back, and that spurious tension's normal force gripped a strip the hanging weight pulls
 /// off a table 50 times more than its weight (tests/table_edge.rs).
-const DEEP: f64 = 0.5;
+pub const DEEP: f64 = 0.5;
 
 /// Cloth topology and scratch buffers for feature contacts (kept across steps).
 #[derive(Debug, Default)]

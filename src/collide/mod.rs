@@ -13,7 +13,7 @@ mod self_contact;
 pub mod spec;
 pub mod stage;
 
-pub use features::FeatureContact;
+pub use features::{FeatureContact, DEEP as FEATURE_DEEP};
 pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};

@@ -33,6 +33,8 @@ pub struct ContactSpring {
     pub gap: f64,
     /// Spring constant (N/m).
     pub stiffness: f64,
+    /// Coulomb limit `mu N` of the contact point's friction (N; 0: none).
+    pub friction: f64,
 }
 
 impl ContactSpring {
@@ -46,6 +48,8 @@ impl ContactSpring {
             && self.gap.is_finite()
             && self.stiffness.is_finite()
             && self.stiffness > 0.0
+            && self.friction.is_finite()
+            && self.friction >= 0.0
     }
 
     /// The used slots: (vertex, weight) with weight > 0, each vertex once.
@@ -60,6 +64,24 @@ impl ContactSpring {
     /// The cloth point's normal component of `u` (positions or velocities).
     pub fn along(&self, u: &[Vec3]) -> f64 {
         self.slots().map(|(i, w)| w * self.normal.dot(u[i])).sum()
+    }
+
+    /// The contact point's velocity, `sum w_k v_k`.
+    pub fn point_velocity(&self, v: &[Vec3]) -> Vec3 {
+        self.slots().map(|(i, w)| v[i] * w).sum()
+    }
+
+    /// The contact point's effective mass, `1 / sum (w_k^2 / m_k)` (kg): what a force on the
+    /// point accelerates.
+    pub fn point_mass(&self, mass: &[f64]) -> f64 {
+        1.0 / self.slots().map(|(i, w)| w * w / mass[i]).sum::<f64>()
+    }
+
+    /// Adds the force `f` on the contact point, shared by weight, times `scale` to `out`.
+    pub fn add_point_force(&self, f: Vec3, scale: f64, out: &mut [Vec3]) {
+        for (i, w) in self.slots() {
+            out[i] += f * (w * scale);
+        }
     }
 
     /// Depth into the layer at positions `x` (positive: inside).
@@ -91,7 +113,15 @@ impl ContactSpring {
     /// (`diag(w) - w w^T` is positive semi-definite for weights summing to at most one), so the
     /// system only gets stiffer, never indefinite.
     pub fn add_jacobian(&self, a: &mut BlockCsr, scale: f64) {
-        let nn = outer(self.normal, self.normal) * (self.stiffness * scale);
+        let nn = outer(self.normal, self.normal) * self.stiffness;
+        self.add_point_block(a, nn, scale);
+    }
+
+    /// Adds `scale w_k w_l B` for a block `B` acting on the contact point (the point's
+    /// stiffness or damping), lumped onto the diagonal as in [`Self::add_jacobian`] when a
+    /// pair is missing from the pattern.
+    pub fn add_point_block(&self, a: &mut BlockCsr, block: Mat3, scale: f64) {
+        let nn = block * scale;
         let slots: Vec<(usize, f64)> = self.slots().collect();
         let complete = slots.iter().all(|&(i, _)| {
             slots
@@ -148,6 +178,7 @@ mod tests {
             point: Vec3::new(0.0, 0.0, 1.0),
             gap: 0.01,
             stiffness: 100.0,
+            friction: 0.0,
         }
     }
 

@@ -44,10 +44,6 @@ pub struct Friction {
     pub vertex: u32,
     pub limit: f64,
     pub reference: Vec3,
-    /// The surface's normal when the filter does not hold the vertex against it (an obstacle
-    /// edge, which the bilateral filter must not hold: the cloth has to slide around it): the
-    /// drag then also leaves out this direction.
-    pub normal: Option<Vec3>,
 }
 
 /// How a vertex's friction acts during a step.
@@ -66,8 +62,9 @@ pub(crate) struct Drag {
     pub limit: f64,
     pub reference: Vec3,
     pub mode: Mode,
-    /// The directions the drag acts in: the filter's free ones `S`, or `S (I - n n^T) S` for a
-    /// surface the filter does not hold (symmetric positive semi-definite either way).
+    /// The directions the drag acts in: the filter's free ones `S` for a held vertex, the
+    /// surface's tangent plane `I - n n^T` for a contact point (symmetric positive
+    /// semi-definite either way).
     tangent: Mat3,
 }
 
@@ -83,26 +80,57 @@ impl Drag {
         if *filter == Filter::Fixed {
             return None;
         }
-        let s = filter.matrix();
-        let tangent = match f.normal {
-            Some(n) if n.is_finite() => s * (Mat3::IDENTITY - outer(n, n)) * s,
-            _ => s,
-        };
+        Some(Self::with_tangent(
+            f.vertex as usize,
+            f.limit,
+            f.reference,
+            filter.matrix(),
+            v,
+            h_over_m,
+        ))
+    }
+
+    /// The drag of a contact point (`vertex` unused) moving at `u` on a static surface of unit
+    /// normal `n`, for a step over the point's effective mass `h_over_m`: friction acts on the
+    /// point's slip in the tangent plane, shared by its vertices as the normal force is.
+    pub fn at_point(limit: f64, n: Vec3, u: Vec3, h_over_m: f64) -> Option<Self> {
+        if !(limit.is_finite() && limit > 0.0 && n.is_finite() && u.is_finite()) {
+            return None;
+        }
+        let tangent = Mat3::IDENTITY - outer(n, n);
+        Some(Self::with_tangent(
+            usize::MAX,
+            limit,
+            Vec3::ZERO,
+            tangent,
+            u,
+            h_over_m,
+        ))
+    }
+
+    fn with_tangent(
+        vertex: usize,
+        limit: f64,
+        reference: Vec3,
+        tangent: Mat3,
+        v: Vec3,
+        h_over_m: f64,
+    ) -> Self {
         let mut d = Self {
-            vertex: f.vertex as usize,
-            limit: f.limit,
-            reference: f.reference,
+            vertex,
+            limit,
+            reference,
             mode: Mode::Sticking { c: 0.0 },
             tangent,
         };
         let slip = d.slip(v);
         d.mode = Mode::Sticking {
-            c: f.limit / slip.length().max(STICK_SPEED),
+            c: limit / slip.length().max(STICK_SPEED),
         };
-        if slip.length() > STICK_SPEED.max(f.limit * h_over_m) {
+        if slip.length() > STICK_SPEED.max(limit * h_over_m) {
             d.mode = d.sliding(slip);
         }
-        Some(d)
+        d
     }
 
     fn slip(&self, v: Vec3) -> Vec3 {

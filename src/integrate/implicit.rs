@@ -323,6 +323,11 @@ pub struct Implicit {
     drags: Vec<Drag>,
     /// Per edge spring of the step's constraints: whether it acts in the current system.
     spring_active: Vec<bool>,
+    /// Friction of acting edge springs' contact points: (spring index, drag).
+    edge_drags: Vec<(usize, Drag)>,
+    /// The current step's filter and the held vertices it released (see `settle_holds`).
+    filter: Vec<Filter>,
+    released: Vec<(usize, Vec3)>,
     /// Per edge spring: its force at the end of the last step (N).
     spring_forces: Vec<f64>,
     /// Constraint impulses of the last step (see [`Integrator::constraint_impulses`]).
@@ -362,6 +367,9 @@ impl Implicit {
             pcg: Pcg::default(),
             drags: Vec::new(),
             spring_active: Vec::new(),
+            edge_drags: Vec::new(),
+            filter: Vec::new(),
+            released: Vec::new(),
             spring_forces: Vec::new(),
             impulses: Vec::new(),
             f0: Vec::new(),
@@ -396,6 +404,9 @@ impl Implicit {
             if c.is_valid(n) && c.depth(s.x) > 0.0 {
                 c.add_jacobian(a, h * h);
             }
+        }
+        for (k, g) in &self.edge_drags {
+            d.constraints.contacts[*k].add_point_block(a, g.damping(), h);
         }
     }
 
@@ -440,6 +451,42 @@ impl Implicit {
             }
             self.spring_active.push(active);
         }
+        // Their contact points' friction: a drag on the point's slip (as the vertex drags
+        // above), shared by weight like the normal force.
+        self.edge_drags.clear();
+        for (k, c) in d.constraints.contacts.iter().enumerate() {
+            if !self.spring_active[k] || c.friction <= 0.0 {
+                continue;
+            }
+            let u = c.point_velocity(s.v);
+            let Some(g) = Drag::at_point(c.friction, c.normal, u, h / c.point_mass(d.mass)) else {
+                continue;
+            };
+            c.add_point_block(a, g.damping(), h);
+            c.add_point_force(g.force(u), h, &mut self.b);
+            self.edge_drags.push((k, g));
+        }
+    }
+
+    /// [`Self::refit_drags`] for the edge springs' contact points.
+    fn refit_edge_drags(&mut self, d: &Dynamics, v0: &[Vec3], h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let mut changed = false;
+        for (k, g) in self.edge_drags.iter_mut() {
+            let c = &d.constraints.contacts[*k];
+            let u0 = c.point_velocity(v0);
+            let Some(mode) = g.refit(u0 + c.point_velocity(&self.dv)) else {
+                continue;
+            };
+            let (old_force, old_damping) = (g.force(u0), g.damping());
+            g.mode = mode;
+            c.add_point_block(a, g.damping() - old_damping, h);
+            c.add_point_force(g.force(u0) - old_force, h, &mut self.b);
+            changed = true;
+        }
+        changed
     }
 
     /// Adds (`sign` 1) or removes (-1) edge springs so that exactly those whose cloth point ends
@@ -507,6 +554,41 @@ impl Implicit {
         for i in 0..n {
             self.impulses[i] = filt[i].constrained(self.impulses[i] - self.b[i]);
         }
+    }
+
+    /// Releases the vertices held against one surface whose constraint impulse (just computed by
+    /// `linear_impulses`) pulls them into it, and holds again released ones the solve then
+    /// moves into it: the filter is bilateral, a contact can only push (an active set, like the
+    /// springs'). The collision stage decides from the start-of-step forces which contacts to
+    /// hold; a vertex next to an obstacle edge is lifted by the edge's spring within the solve,
+    /// and held down it glued the lever a strip bent over the edge rests on. Returns whether
+    /// any changed.
+    fn settle_holds(&mut self, filt: &mut [Filter], d: &Dynamics, v0: &[Vec3]) -> bool {
+        /// Adhesion below this velocity change (m/s) is round-off, not a pull.
+        const TOL: f64 = 1e-5;
+        let mut changed = false;
+        for (i, n) in self.released.iter().copied() {
+            let target = d.constraints.target_velocity[i];
+            if (v0[i] + self.dv[i] - target).dot(n) < -TOL {
+                filt[i] = Filter::Direction(n);
+                self.z[i] = filt[i].constrained(target - v0[i]);
+                changed = true;
+            }
+        }
+        self.released.retain(|(i, _)| filt[*i] == Filter::Free);
+        for (i, f) in filt.iter_mut().enumerate() {
+            if let Filter::Direction(n) = *f {
+                if self.impulses[i].dot(n) < -TOL * d.mass[i]
+                    && !self.released.iter().any(|r| r.0 == i)
+                {
+                    *f = Filter::Free;
+                    self.z[i] = Vec3::ZERO;
+                    self.released.push((i, n));
+                    changed = true;
+                }
+            }
+        }
+        changed
     }
 
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
@@ -604,6 +686,10 @@ impl Implicit {
             if c.is_valid(self.xk.len()) {
                 c.add_force(c.depth(&self.xk).max(0.0), 1.0, &mut self.b);
             }
+        }
+        for (k, g) in &self.edge_drags {
+            let c = &d.constraints.contacts[*k];
+            c.add_point_force(g.force(c.point_velocity(&self.vk)), 1.0, &mut self.b);
         }
         let (mut ke0, mut ke1, mut w_other, mut w_constraint) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..self.f0.len() {
@@ -754,7 +840,12 @@ impl Integrator for Implicit {
         ] {
             scratch(buf, n);
         }
-        let filt = &d.constraints.filter;
+        // The step's own copy of the filter: contacts whose constraint would pull the vertex
+        // into the surface are released during the step.
+        let mut filter = std::mem::take(&mut self.filter);
+        filter.clone_from(&d.constraints.filter);
+        self.released.clear();
+        let filt = &mut filter;
         self.assemble(d, &State { t, x, v }, h);
         // Constrained components of dv are fixed: z = (I - S)(v_target - v).
         for i in 0..n {
@@ -765,16 +856,29 @@ impl Integrator for Implicit {
         let mut stats = self.solve(filt, true);
         std::mem::swap(&mut self.older, &mut self.last);
         let mut cg_iterations = stats.iterations;
+        // Contact holds to settle (their impulses cost a product with the matrix).
+        let holds = filt.iter().any(|f| matches!(f, Filter::Direction(_)));
+        let mut impulses_current = false;
         for _ in 0..MAX_REFITS {
             let drags = self.refit_drags(v, h);
             let springs = self.refit_springs(d, &State { t, x, v }, h);
-            if !(drags || springs) {
+            let edge_drags = self.refit_edge_drags(d, v, h);
+            let mut released = false;
+            if holds {
+                self.linear_impulses(filt);
+                impulses_current = true;
+                released = self.settle_holds(filt, d, v);
+            }
+            if !(drags || springs || edge_drags || released) {
                 break;
             }
             stats = self.solve(filt, false);
             cg_iterations += stats.iterations;
+            impulses_current = false;
         }
-        self.linear_impulses(filt);
+        if !impulses_current {
+            self.linear_impulses(filt);
+        }
 
         // Newton iterations on the nonlinear backward-Euler system, only while the step creates
         // energy (see `EnergyCheck`).
@@ -857,6 +961,7 @@ impl Integrator for Implicit {
                     0.0
                 }
             }));
+        self.filter = filter;
         IntegratorStats {
             force_evaluations: 2 + newton,
             cg_iterations,

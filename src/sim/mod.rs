@@ -485,7 +485,7 @@ impl Simulation {
             self.constraints.filter[i] = Filter::Fixed;
             self.constraints.target_velocity[i] = self.cloth.v[i];
         }
-        self.edge_springs(h);
+        self.edge_springs();
         let held = self.contact_constraints(t);
         let e0 = match self.energy_cache {
             Some(e) => e,
@@ -590,11 +590,6 @@ impl Simulation {
             self.friction_limit.clear();
             self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
             let solves_friction = self.integrator.solves_friction();
-            for f in &self.constraints.friction {
-                if let Some(normal) = f.normal {
-                    stage.set_friction_solved(f.vertex as usize, normal);
-                }
-            }
             if !held.is_empty() {
                 let impulses = self.integrator.constraint_impulses();
                 if impulses.is_none() {
@@ -711,7 +706,6 @@ impl Simulation {
                     vertex: i as u32,
                     limit,
                     reference: *surface,
-                    normal: None,
                 });
             }
         }
@@ -722,7 +716,7 @@ impl Simulation {
     /// [`crate::integrate::ContactSpring`]), with in-solve Coulomb friction whose limit is `mu`
     /// times the force the same contact's spring ended the last substep with, shared by
     /// weight. The stage then leaves those contacts to the solver unless they end deep.
-    fn edge_springs(&mut self, h: f64) {
+    fn edge_springs(&mut self) {
         /// `k h^2 / m` of an edge spring at the contact point's mass `m`: the spring stops the
         /// point within a step, and a load of the cloth's own weight per vertex deflects it by
         /// `g h^2 / 1e3` (a micrometre at 120 Hz). Springs as stiff as the cloth's stiffest
@@ -734,6 +728,9 @@ impl Simulation {
         if !self.integrator.solves_contacts() {
             return;
         }
+        // The scene's substep, not a subdivided one: a spring stiffened by `1 / h^2` as the guard
+        // halves the step would only store more energy in a contact that is already deep.
+        let h = self.settings.dt / f64::from(self.settings.substeps.max(1));
         let n = self.cloth.len();
         let solves_friction = self.integrator.solves_friction();
         let Some(stage) = self.collision.as_mut() else {
@@ -753,16 +750,21 @@ impl Simulation {
             let m: f64 = slots()
                 .map(|k| c.weights[k] * mass[c.verts[k] as usize])
                 .sum();
-            let spring = crate::integrate::ContactSpring {
+            let mut spring = crate::integrate::ContactSpring {
                 verts: c.verts,
                 weights: c.weights,
                 normal: c.normal,
                 point: c.point,
                 gap: c.gap,
                 stiffness: CONTACT_STIFFNESS * m / (h * h),
+                friction: 0.0,
             };
             let movable = slots().any(|k| filter[c.verts[k] as usize] != Filter::Fixed);
-            if !spring.is_valid(n) || !movable {
+            // A contact already deep (cloth pinched below its thickness under a press that
+            // stopped) stays with the collision stage's pinch and push: as a spring it would
+            // start with a large stored force (17 J released in one step, measured).
+            let deep = spring.depth(&self.cloth.x) > (1.0 - crate::collide::FEATURE_DEEP) * c.gap;
+            if !spring.is_valid(n) || !movable || deep {
                 continue;
             }
             // The normal force of the last solve's spring on this face or edge (none for a new
@@ -771,19 +773,10 @@ impl Simulation {
             let normal_force = lagged
                 .binary_search_by(|l| l.0.cmp(&c.verts))
                 .map_or(0.0, |k| lagged[k].1);
-            sprung.push(c.verts);
-            for k in slots() {
-                let i = c.verts[k] as usize;
-                let limit = c.mu * normal_force * c.weights[k];
-                if solves_friction && limit > 0.0 && filter[i] != Filter::Fixed {
-                    self.constraints.friction.push(crate::integrate::Friction {
-                        vertex: i as u32,
-                        limit,
-                        reference: Vec3::ZERO,
-                        normal: Some(c.normal),
-                    });
-                }
+            if solves_friction {
+                spring.friction = c.mu * normal_force;
             }
+            sprung.push(c.verts);
             self.constraints.contacts.push(spring);
         }
         stage.set_sprung(sprung);
@@ -824,12 +817,6 @@ impl Simulation {
             v: &self.cloth.v,
         };
         self.effects.forces(&s, &mut self.scratch_f);
-        // Edge springs push too: a cloth lying on a table and over its edge is lifted off the
-        // top near the edge by the edge's reaction (the segment over the edge is a lever carrying
-        // the hanging part); held there, the bilateral filter would glue it to the table.
-        for c in &self.constraints.contacts {
-            c.add_force(c.depth(&self.cloth.x).max(0.0), 1.0, &mut self.scratch_f);
-        }
         // The contacts grouped by vertex (in contact order within a vertex).
         let mut contacts: Vec<(usize, Vec3, Vec3, usize)> = stage
             .contacts()
