@@ -818,7 +818,24 @@ impl Integrator for Implicit {
         self.older.clear();
     }
 
+    /// Runs the step on a thread of rayon's pool: its parallel products and sweeps then fork
+    /// and join from inside the pool, where a join costs a deque push, instead of from the
+    /// caller's thread, where each join is a cross-thread wake-up (4-35 us on the 2-core test
+    /// machine, dozens per step; ~20 % of a 64x64 step was the scheduler's).
     fn step(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> IntegratorStats {
+        rayon::scope(|_| self.step_in_pool(d, t, h, x, v))
+    }
+}
+
+impl Implicit {
+    fn step_in_pool(
         &mut self,
         d: &Dynamics,
         t: f64,
