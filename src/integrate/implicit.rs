@@ -1354,6 +1354,51 @@ mod tests {
     /// free end along the tangent by `v h` and stretches the spring by
     /// `sqrt(l^2 + (v h)^2) - l` = 7 mm, i.e. `k e^2 / 2` = 26 J out of 25 uJ of kinetic energy.
     /// The Newton iterations must bring it back onto (about) the circle without creating energy.
+    /// A vertex held on a surface (normal +z) by the filter, pulled off it or pressed into it by a
+    /// spring to a fixed vertex above: the filter is bilateral, the contact is not. Pulled, the
+    /// step releases it (it moves up, no impulse); pressed, it stays held with a pushing impulse.
+    #[test]
+    fn holds_are_released_only_when_they_would_pull() {
+        use crate::cloth::topology::Spring;
+        use crate::effects::Springs;
+        use crate::integrate::Constraints;
+        for (rest, pulled) in [(0.05, true), (0.2, false)] {
+            let mut effects = EffectSet::new();
+            effects.push(Box::new(Springs::new(
+                "stretch",
+                vec![Spring { i: 0, j: 1, rest }],
+                vec![100.0],
+                "k".into(),
+            )));
+            let mass = [1e-3, 1e-3];
+            let mut constraints = Constraints::free(2);
+            constraints.filter[0] = Filter::Fixed;
+            constraints.filter[1] = Filter::Direction(Vec3::Z);
+            let d = Dynamics {
+                effects: &effects,
+                mass: &mass,
+                constraints: &constraints,
+            };
+            let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
+            let mut v = [Vec3::ZERO; 2];
+            let mut solver = Implicit::new(ImplicitSettings::default());
+            solver.prepare(&effects, 2);
+            solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v);
+            let impulse = solver.constraint_impulses().map_or(Vec3::ZERO, |r| r[1]);
+            if pulled {
+                assert!(v[1].z > 0.0, "pulled vertex stayed held: v {:?}", v[1]);
+                assert_eq!(
+                    impulse,
+                    Vec3::ZERO,
+                    "a released vertex has no constraint impulse"
+                );
+            } else {
+                assert_eq!(v[1].z, 0.0, "pressed vertex left the surface: v {:?}", v[1]);
+                assert!(impulse.z > 0.0, "the surface must push: {impulse:?}");
+            }
+        }
+    }
+
     #[test]
     fn stiff_rotating_spring_creates_no_energy() {
         use crate::cloth::topology::Spring;
