@@ -17,6 +17,7 @@
 //! modes, see [`super::friction`]).
 
 use super::BlockCsr;
+use crate::effects::outer;
 use crate::{Mat3, Vec3};
 
 /// One contact of a static obstacle feature with the cloth point `sum weights_k x_verts_k`.
@@ -53,7 +54,7 @@ impl ContactSpring {
     }
 
     /// The used slots: (vertex, weight) with weight > 0, each vertex once.
-    fn slots(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+    pub(crate) fn slots(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         (0..3).filter_map(move |k| {
             let repeated = self.verts[..k].contains(&self.verts[k]);
             (self.weights[k] > 0.0 && !repeated)
@@ -107,6 +108,15 @@ impl ContactSpring {
         }
     }
 
+    /// Whether every pair of the used slots has its block in `a`'s pattern (else the point's
+    /// blocks are lumped onto the diagonal).
+    fn in_pattern(&self, a: &BlockCsr) -> bool {
+        self.slots().all(|(i, _)| {
+            self.slots()
+                .all(|(j, _)| i == j || a.try_slot(i as u32, j as u32).is_some())
+        })
+    }
+
     /// Adds `scale k w_k w_l n n^T` (the negated force Jacobian) to `a`. Pairs missing from the
     /// sparsity pattern (cloth without shear springs has no block across a triangle diagonal)
     /// are lumped onto the diagonal, `k w_k n n^T` per vertex: that dominates the exact block
@@ -122,15 +132,10 @@ impl ContactSpring {
     /// pair is missing from the pattern.
     pub fn add_point_block(&self, a: &mut BlockCsr, block: Mat3, scale: f64) {
         let nn = block * scale;
-        let slots: Vec<(usize, f64)> = self.slots().collect();
-        let complete = slots.iter().all(|&(i, _)| {
-            slots
-                .iter()
-                .all(|&(j, _)| i == j || a.try_slot(i as u32, j as u32).is_some())
-        });
-        for &(i, wi) in &slots {
+        let complete = self.in_pattern(a);
+        for (i, wi) in self.slots() {
             if complete {
-                for &(j, wj) in &slots {
+                for (j, wj) in self.slots() {
                     a.add(i as u32, j as u32, nn * (wi * wj));
                 }
             } else {
@@ -141,28 +146,14 @@ impl ContactSpring {
 
     /// The Jacobian's product with `u` as [`Self::add_jacobian`] adds it, times `scale`, into `out`.
     pub fn add_jacobian_product(&self, a: &BlockCsr, u: &[Vec3], scale: f64, out: &mut [Vec3]) {
-        let slots: Vec<(usize, f64)> = self.slots().collect();
-        let complete = slots.iter().all(|&(i, _)| {
-            slots
-                .iter()
-                .all(|&(j, _)| i == j || a.try_slot(i as u32, j as u32).is_some())
-        });
         let k = self.stiffness * scale;
-        if complete {
-            let un = self.along(u);
-            for &(i, wi) in &slots {
-                out[i] += self.normal * (k * wi * un);
-            }
-        } else {
-            for &(i, wi) in &slots {
-                out[i] += self.normal * (k * wi * self.normal.dot(u[i]));
-            }
+        let complete = self.in_pattern(a);
+        let un = self.along(u);
+        for (i, wi) in self.slots() {
+            let ui = if complete { un } else { self.normal.dot(u[i]) };
+            out[i] += self.normal * (k * wi * ui);
         }
     }
-}
-
-fn outer(a: Vec3, b: Vec3) -> Mat3 {
-    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@
 //! robot link) becomes a slider; the system is then solved once more with the new modes.
 
 use super::{BlockCsr, Filter};
+use crate::effects::outer;
 use crate::{Mat3, Vec3};
 
 /// Tangential speed (m/s) below which a held vertex counts as sticking: the drag is then
@@ -183,10 +184,6 @@ impl Drag {
                 .then(|| self.sliding(slip)),
         }
     }
-}
-
-fn outer(a: Vec3, b: Vec3) -> Mat3 {
-    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 /// Adds `h (-df/dv)` of every drag to the diagonal blocks of `a`.

@@ -745,21 +745,19 @@ impl Simulation {
             if c.verts.iter().any(|&v| v as usize >= n) || !seen.insert(c.verts) {
                 continue;
             }
-            let slots =
-                || (0..3).filter(|&k| c.weights[k] > 0.0 && !c.verts[..k].contains(&c.verts[k]));
-            let m: f64 = slots()
-                .map(|k| c.weights[k] * mass[c.verts[k] as usize])
-                .sum();
             let mut spring = crate::integrate::ContactSpring {
                 verts: c.verts,
                 weights: c.weights,
                 normal: c.normal,
                 point: c.point,
                 gap: c.gap,
-                stiffness: CONTACT_STIFFNESS * m / (h * h),
+                stiffness: 0.0,
                 friction: 0.0,
             };
-            let movable = slots().any(|k| filter[c.verts[k] as usize] != Filter::Fixed);
+            // `k h^2 / m` at the contact point's mass.
+            let m: f64 = spring.slots().map(|(i, w)| w * mass[i]).sum();
+            spring.stiffness = CONTACT_STIFFNESS * m / (h * h);
+            let movable = spring.slots().any(|(i, _)| filter[i] != Filter::Fixed);
             // A contact already deep (cloth pinched below its thickness under a press that
             // stopped) stays with the collision stage's pinch and push: as a spring it would
             // start with a large stored force (17 J released in one step, measured).
