@@ -8,8 +8,10 @@
 //! particle at rest sticks iff `tan(a) <= mu` and a sliding one accelerates at
 //! `g (sin a - mu cos a)`: exactly Coulomb's law, integrated over the step.
 
+use super::contact::Contact;
+use super::feedback::Held;
 use super::obstacle::Obstacle;
-use super::stage::{Contact, DetectionMode, ResponseMode};
+use super::settings::{DetectionMode, ResponseMode};
 use crate::Vec3;
 
 /// A vertex within `th (1 + REST_BAND)` of an obstacle is in contact without being pushed. The
@@ -32,7 +34,7 @@ pub(crate) struct VertexInput {
     /// (world normal, normal velocity change) the implicit filter applied to this vertex this
     /// step, one per held surface (zero when not held): the one along this contact's normal
     /// counts in its friction bound.
-    pub held: super::stage::Held,
+    pub held: Held,
     /// Normals of the surfaces whose friction the solver applied already (zero: unused): their
     /// contacts keep the tangential velocity it left.
     pub friction_solved: [Vec3; 3],

@@ -8,7 +8,7 @@
 
 use super::motion::Motion;
 use super::obstacle::{Obstacle, ObstacleError};
-use super::stage::{CollisionSettings, DetectionMode, ResponseMode};
+use super::settings::{CollisionSettings, DetectionMode, ResponseMode};
 use crate::{Pose, Vec3};
 use serde::{Deserialize, Serialize};
 

@@ -1,0 +1,55 @@
+//! Feature contacts: the CCD's hits, the cloth state the passes share, and the contacts of
+//! static obstacles handed to the solver.
+
+use crate::collide::settings::DetectionMode;
+use crate::Vec3;
+
+/// One feature-vs-cloth contact found by the CCD.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Hit {
+    pub t: f64,
+    pub verts: [u32; 3],
+    pub w: [f64; 3],
+    /// World unit normal from the feature towards the side the cloth came from.
+    pub normal: Vec3,
+    /// Feature contact point in the obstacle's local frame.
+    pub local: Vec3,
+}
+
+/// Per-step inputs shared by detection and response.
+pub(crate) struct ClothState<'a> {
+    pub x0: &'a [Vec3],
+    pub inv_mass: &'a [f64],
+    pub thickness: &'a [f64],
+    pub friction: &'a [f64],
+    pub h: f64,
+    pub mode: DetectionMode,
+    /// Per vertex, the normals whose friction the solver applied (empty: none).
+    pub friction_solved: &'a [[Vec3; 3]],
+    /// The cloth faces and edges the solver held with an edge spring this step (sorted).
+    pub sprung: &'a [[u32; 3]],
+}
+
+/// A contact of a static obstacle's edge or corner with the cloth, for the implicit solver to
+/// hold as a one-sided spring next substep (see [`crate::integrate::ContactSpring`]): the cloth
+/// point `sum weights_k x_k` stays `gap` in front of `point` along `normal`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeatureContact {
+    pub verts: [u32; 3],
+    pub weights: [f64; 3],
+    /// World unit normal from the feature towards the cloth.
+    pub normal: Vec3,
+    /// The feature's contact point (world).
+    pub point: Vec3,
+    /// Contact distance `radius + thickness` (m).
+    pub gap: f64,
+    pub mu: f64,
+}
+
+/// A contact the solver held as a spring is answered here only once the cloth point is deeper
+/// than this fraction of the contact distance into it (a safety net: the spring's deflection
+/// under load is micrometres). Above it, a push by position would stretch the cloth over the
+/// edge: the solver moves the segment's vertices with their neighbours and the push moves only
+/// them back, and that spurious tension's normal force gripped a strip the hanging weight pulls
+/// off a table 50 times more than its weight (tests/table_edge.rs).
+pub const DEEP: f64 = 0.5;

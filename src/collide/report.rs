@@ -1,0 +1,24 @@
+//! What one `resolve` of the collision stage did (metrics).
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CollisionReport {
+    /// Number of obstacle contacts (see `CollisionStage::contacts`).
+    pub contacts: usize,
+    /// Obstacle-feature vs cloth face/edge contacts answered (thin rods, box and mesh edges),
+    /// summed over the detection passes.
+    pub feature_contacts: usize,
+    /// Deepest remaining penetration of a contact vertex into an obstacle's thickness layer after
+    /// the response (m, >= 0).
+    pub deepest_penetration: f64,
+    /// Exact count of intersecting non-adjacent triangle pairs at the end of the step, when
+    /// `count_self_intersections` is on and self-collision is enabled.
+    pub self_intersections: Option<usize>,
+    /// Cloth-cloth colliding pairs the fail-safe could not resolve (kinematic vertices involved,
+    /// or the step started intersecting).
+    pub unresolved: usize,
+    /// Obstacles skipped because their swept bounds are far from the cloth's (see
+    /// [`super::CollisionStage::set_culling`]).
+    pub culled: usize,
+    /// Wall time of `resolve`.
+    pub time_s: f64,
+}

@@ -1,0 +1,102 @@
+//! The self-contact collider: the cloth's triangles, edges and 1-ring, the scratch buffers of
+//! the passes, and the stencils of its pairs.
+
+use super::stencil::Stencil;
+use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
+
+pub(crate) struct SelfCollider {
+    pub(super) triangles: Vec<[u32; 3]>,
+    pub(super) edges: Vec<[u32; 2]>,
+    /// CSR vertex -> neighbour vertices (1-ring), for excluding adjacent vertex-vertex pairs.
+    pub(super) nbr_start: Vec<u32>,
+    pub(super) nbr: Vec<u32>,
+    pub(super) hash: SpatialHash,
+    pub(super) qboxes: Vec<Aabb>,
+    pub(super) iboxes: Vec<Aabb>,
+    pub(super) stamp: PairScratch,
+    /// Per-candidate CCD hit flags (vertex-triangle, edge-edge), reused.
+    pub(super) flags: (Vec<bool>, Vec<bool>),
+    pub(super) pairs: Vec<(u32, u32)>,
+    pub(super) pairs_ee: Vec<(u32, u32)>,
+    pub(super) w: Vec<f64>,
+    pub(super) parent: Vec<u32>,
+    pub(super) zone_members: Vec<Vec<u32>>,
+    pub(super) in_zone: Vec<bool>,
+}
+
+pub(super) fn shares_vertex(a: &[u32], b: &[u32]) -> bool {
+    a.iter().any(|v| b.contains(v))
+}
+
+impl SelfCollider {
+    pub fn new(triangles: &[[u32; 3]], n_vertices: usize) -> Self {
+        let mut edges: Vec<[u32; 2]> = triangles
+            .iter()
+            .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        let mut deg = vec![0u32; n_vertices + 1];
+        for e in &edges {
+            deg[e[0] as usize + 1] += 1;
+            deg[e[1] as usize + 1] += 1;
+        }
+        for i in 0..n_vertices {
+            deg[i + 1] += deg[i];
+        }
+        let mut fill = deg.clone();
+        let mut nbr = vec![0u32; 2 * edges.len()];
+        for e in &edges {
+            for (a, b) in [(e[0], e[1]), (e[1], e[0])] {
+                nbr[fill[a as usize] as usize] = b;
+                fill[a as usize] += 1;
+            }
+        }
+        Self {
+            triangles: triangles.to_vec(),
+            edges,
+            nbr_start: deg,
+            nbr,
+            hash: SpatialHash::default(),
+            qboxes: Vec::new(),
+            iboxes: Vec::new(),
+            stamp: PairScratch::default(),
+            flags: (Vec::new(), Vec::new()),
+            pairs: Vec::new(),
+            pairs_ee: Vec::new(),
+            w: Vec::new(),
+            parent: Vec::new(),
+            zone_members: Vec::new(),
+            in_zone: Vec::new(),
+        }
+    }
+
+    pub(super) fn adjacent(&self, a: u32, b: u32) -> bool {
+        let (s, e) = (
+            self.nbr_start[a as usize] as usize,
+            self.nbr_start[a as usize + 1] as usize,
+        );
+        self.nbr[s..e].contains(&b)
+    }
+
+    /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
+    /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
+    pub(super) fn vt_stencil(&self, v: u32, t: u32, bary: [f64; 3]) -> Stencil {
+        let tri = self.triangles[t as usize];
+        Stencil {
+            idx: [v, tri[0], tri[1], tri[2]],
+            c: [1.0, -bary[0], -bary[1], -bary[2]],
+            len: 4,
+        }
+    }
+
+    pub(super) fn ee_stencil(&self, e1: u32, e2: u32, s: f64, u: f64) -> Stencil {
+        let (a, b) = (self.edges[e1 as usize], self.edges[e2 as usize]);
+        Stencil {
+            idx: [a[0], a[1], b[0], b[1]],
+            c: [1.0 - s, s, -(1.0 - u), -u],
+            len: 4,
+        }
+    }
+}

@@ -1,0 +1,25 @@
+//! Cloth-cloth collision: proximity repulsion (Bridson-Fedkiw-Anderson 2002: inelastic impulse
+//! plus Coulomb friction on close pairs), bounded CCD passes, then rigid impact zones
+//! (Provot 1997, Harmon et al. 2008) as the fail-safe so a step that starts free of
+//! self-intersections also ends free of them.
+//!
+//! Every pair is written as a weighted sum of up to four vertices, `r = sum c_k x_k` (vertex-
+//! triangle: `x_p - sum b_i x_i`; edge-edge: `(1-s) x_a + s x_b - (1-u) x_c - u x_d`;
+//! vertex-vertex: `x_i - x_j`). A change `d` of `r` is distributed as `x_k += c_k w_k d / M` with
+//! `M = sum c_k^2 w_k` (w = inverse mass), the minimal-kinetic-energy impulse; kinematic
+//! vertices (w = 0) never move.
+//!
+//! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
+//! `pairs` (broad phase), one query per file (`proximity`, `ccd`, `intersections`), `zones`
+//! (the impact-zone fail-safe), `resolve` (their order per detection mode).
+
+mod ccd;
+mod collider;
+mod intersections;
+mod pairs;
+mod proximity;
+mod resolve;
+mod stencil;
+mod zones;
+
+pub(crate) use collider::SelfCollider;

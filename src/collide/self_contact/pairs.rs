@@ -1,0 +1,92 @@
+//! Self-contact broad phase: candidate vertex-triangle and edge-edge (or vertex-vertex) pairs
+//! over swept boxes.
+
+use super::collider::{shares_vertex, SelfCollider};
+use crate::collide::broad::{cell_size, collect_pairs, Aabb};
+use crate::Vec3;
+
+impl SelfCollider {
+    /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
+    /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
+    pub(super) fn broad_phase(
+        &mut self,
+        xa: &[Vec3],
+        xb: &[Vec3],
+        margin: impl Fn(usize) -> f64,
+        vertex_vertex: bool,
+    ) {
+        // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
+        // the bare swept boxes, so no pair is found at more than the contact distance.
+        let n = xa.len().min(xb.len());
+        self.qboxes.clear();
+        self.qboxes
+            .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
+        if vertex_vertex {
+            self.iboxes.clear();
+            self.iboxes
+                .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], 0.0)));
+            let cell = cell_size(&self.qboxes, 0.0);
+            self.hash.build(cell, &self.iboxes);
+            let mut pairs = std::mem::take(&mut self.pairs);
+            let mut stamp = std::mem::take(&mut self.stamp);
+            let (q, it) = (
+                std::mem::take(&mut self.qboxes),
+                std::mem::take(&mut self.iboxes),
+            );
+            collect_pairs(
+                &self.hash,
+                &q,
+                &it,
+                &mut stamp,
+                |a, b| a < b && !self.adjacent(a, b),
+                &mut pairs,
+            );
+            (self.qboxes, self.iboxes) = (q, it);
+            self.pairs = pairs;
+            self.stamp = stamp;
+            self.pairs_ee.clear();
+            return;
+        }
+        let tris = &self.triangles;
+        self.iboxes.clear();
+        self.iboxes.extend(tris.iter().map(|t| {
+            let [a, b, c] = t.map(|i| i as usize);
+            Aabb::from_points(&[xa[a], xa[b], xa[c], xb[a], xb[b], xb[c]], 0.0)
+        }));
+        let cell = cell_size(&self.iboxes, 0.0);
+        self.hash.build(cell, &self.iboxes);
+        collect_pairs(
+            &self.hash,
+            &self.qboxes,
+            &self.iboxes,
+            &mut self.stamp,
+            |v, t| !tris[t as usize].contains(&v),
+            &mut self.pairs,
+        );
+        let edges = &self.edges;
+        self.iboxes.clear();
+        self.iboxes.extend(edges.iter().map(|e| {
+            let (a, b) = (e[0] as usize, e[1] as usize);
+            Aabb::from_points(&[xa[a], xa[b], xb[a], xb[b]], 0.0)
+        }));
+        self.qboxes.clear();
+        self.qboxes
+            .extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
+                let m = margin(e[0] as usize).max(margin(e[1] as usize));
+                Aabb {
+                    lo: bx.lo - Vec3::splat(m),
+                    hi: bx.hi + Vec3::splat(m),
+                }
+            }));
+        let cell = cell_size(&self.iboxes, 0.0);
+        self.hash.build(cell, &self.iboxes);
+        collect_pairs(
+            &self.hash,
+            &self.qboxes,
+            &self.iboxes,
+            &mut self.stamp,
+            |a, b| a < b && !shares_vertex(&edges[a as usize], &edges[b as usize]),
+            &mut self.pairs_ee,
+        );
+    }
+}

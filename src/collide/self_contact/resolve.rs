@@ -1,0 +1,75 @@
+//! The order of self-collision in one step, per detection mode: proximity repulsion passes,
+//! then (continuous) bounded CCD passes and the impact-zone fail-safe.
+
+use super::collider::SelfCollider;
+use crate::collide::settings::{CollisionSettings, DetectionMode};
+use crate::Vec3;
+
+/// Vertices touching an obstacle respond to cloth-cloth impulses as if this much heavier, so the
+/// cloth on top gives way rather than the layer pressed against the obstacle.
+const CONTACT_MASS_FACTOR: f64 = 10.0;
+
+pub(crate) struct SelfOutcome {
+    pub unresolved: usize,
+}
+
+impl SelfCollider {
+    #[allow(clippy::too_many_arguments)]
+    pub fn resolve(
+        &mut self,
+        settings: &CollisionSettings,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        inv_mass: &[f64],
+        thickness: &[f64],
+        friction: &[f64],
+        in_contact: &[bool],
+        h: f64,
+    ) -> SelfOutcome {
+        let n = x0.len().min(x1.len()).min(inv_mass.len());
+        self.w.clear();
+        self.w.extend((0..n).map(|i| {
+            if in_contact[i] {
+                inv_mass[i] / CONTACT_MASS_FACTOR
+            } else {
+                inv_mass[i]
+            }
+        }));
+        let iters = settings.self_iterations.max(1);
+        match settings.mode {
+            DetectionMode::Spheres => {
+                for _ in 0..iters {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, true) == 0 {
+                        break;
+                    }
+                }
+                SelfOutcome { unresolved: 0 }
+            }
+            DetectionMode::Proximity => {
+                for _ in 0..iters {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, false) == 0 {
+                        break;
+                    }
+                }
+                SelfOutcome { unresolved: 0 }
+            }
+            DetectionMode::Continuous => {
+                self.repulsion_pass(x0, x1, v1, thickness, friction, h, false);
+                let mut clean = false;
+                for _ in 0..iters {
+                    if self.ccd_pass(x0, x1, v1, thickness, h, true) == 0 {
+                        clean = true;
+                        break;
+                    }
+                }
+                let unresolved = if clean {
+                    0
+                } else {
+                    self.impact_zones(settings.zone_iterations, x0, x1, v1, thickness, h)
+                };
+                SelfOutcome { unresolved }
+            }
+        }
+    }
+}
