@@ -3,6 +3,7 @@
 //! gravity as the candidate motion), with cloth-cloth collision off and on.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use drape::collide::SolverFeedback;
 use drape::collide::{CollisionSettings, CollisionStage, DetectionMode, Obstacle};
 use drape::{Pose, Vec3};
 
@@ -86,7 +87,7 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| {
                     x1.copy_from_slice(&d.x1);
                     v1.copy_from_slice(&d.v1);
-                    stage.resolve(&d.x0, &mut x1, &mut v1, &w, H)
+                    stage.resolve(&d.x0, &mut x1, &mut v1, &w, H, &SolverFeedback::default())
                 })
             });
         }

@@ -3,6 +3,7 @@
 //! obstacle-feature vs cloth-face tests on top of the vertex tests.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use drape::collide::SolverFeedback;
 use drape::collide::{CollisionSettings, CollisionStage, DetectionMode, Motion, Obstacle};
 use drape::{Pose, Vec3};
 
@@ -51,7 +52,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             x1.copy_from_slice(&x0);
             v1.fill(Vec3::ZERO);
-            stage.resolve(&x0, &mut x1, &mut v1, &w, H)
+            stage.resolve(&x0, &mut x1, &mut v1, &w, H, &SolverFeedback::default())
         })
     });
 }

@@ -4,6 +4,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use drape::collide::CollisionStage;
+use drape::collide::SolverFeedback;
 use drape::scene::Scene;
 use drape::Vec3;
 
@@ -50,7 +51,14 @@ fn heavy(c: &mut Criterion) {
             .map(|_| {
                 let (mut x, mut v) = (x1.clone(), v0.clone());
                 let t = std::time::Instant::now();
-                black_box(stage.resolve(&x0, &mut x, &mut v, &inv_mass, h_step));
+                black_box(stage.resolve(
+                    &x0,
+                    &mut x,
+                    &mut v,
+                    &inv_mass,
+                    h_step,
+                    &SolverFeedback::default(),
+                ));
                 t.elapsed().as_secs_f64() * 1e3
             })
             .fold(f64::INFINITY, f64::min)
@@ -71,7 +79,14 @@ fn heavy(c: &mut Criterion) {
         c.bench_function(name, |b| {
             b.iter(|| {
                 let (mut x, mut v) = (x1.clone(), v0.clone());
-                black_box(stage.resolve(&x0, &mut x, &mut v, &inv_mass, h_step))
+                black_box(stage.resolve(
+                    &x0,
+                    &mut x,
+                    &mut v,
+                    &inv_mass,
+                    h_step,
+                    &SolverFeedback::default(),
+                ))
             })
         });
     };

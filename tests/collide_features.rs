@@ -2,6 +2,7 @@
 //! sheet whose vertex spacing (5 cm) is ten times the rod's diameter, so no vertex ever meets it.
 
 use drape::collide::narrow::{point_triangle_closest, segment_segment_closest};
+use drape::collide::SolverFeedback;
 use drape::collide::{CollisionSettings, CollisionStage, DetectionMode, Motion, Obstacle};
 use drape::{Pose, Vec3};
 
@@ -115,7 +116,7 @@ fn sweep(mode: DetectionMode, cylinder: bool, speed: f64, steps: usize) -> Vec<(
         for (xi, vi) in x.iter_mut().zip(&v) {
             *xi += *vi * H;
         }
-        st.resolve(&x0, &mut x, &mut v, &w, H);
+        st.resolve(&x0, &mut x, &mut v, &w, H, &SolverFeedback::default());
         out.push((st.obstacles()[0].pose.translation.y, x.clone()));
     }
     out
@@ -189,7 +190,14 @@ fn proximity_mode_pushes_a_face_out_of_a_resting_rod() {
         n,
     );
     let x0 = x.clone();
-    let report = st.resolve(&x0, &mut x, &mut v, &vec![1.0; n], H);
+    let report = st.resolve(
+        &x0,
+        &mut x,
+        &mut v,
+        &vec![1.0; n],
+        H,
+        &SolverFeedback::default(),
+    );
     assert!(report.feature_contacts > 0);
     let (a, b) = (
         Vec3::new(-HALF_LEN, -0.002, ROD_Z),
@@ -210,7 +218,14 @@ fn kinematic_vertices_are_never_moved_by_a_feature() {
     let mut v = vec![Vec3::ZERO; n];
     let mut st = stage(DetectionMode::Continuous, rod(false, -0.1, 20.0), tris, n);
     st.advance_obstacles(0.0, H);
-    st.resolve(&x_start, &mut x, &mut v, &vec![0.0; n], H);
+    st.resolve(
+        &x_start,
+        &mut x,
+        &mut v,
+        &vec![0.0; n],
+        H,
+        &SolverFeedback::default(),
+    );
     assert_eq!(x, x_start);
     assert!(v.iter().all(|v| *v == Vec3::ZERO));
 }

@@ -1,5 +1,6 @@
 //! Stage-level obstacle tests, driven by a semi-implicit Euler loop inside the test.
 
+use drape::collide::SolverFeedback;
 use drape::collide::{
     CollisionReport, CollisionSettings, CollisionStage, DetectionMode, Motion, Obstacle,
     ResponseMode,
@@ -42,7 +43,14 @@ impl Particles {
                 self.x[i] += self.v[i] * H;
             }
         }
-        stage.resolve(&x0, &mut self.x, &mut self.v, &self.w, H)
+        stage.resolve(
+            &x0,
+            &mut self.x,
+            &mut self.v,
+            &self.w,
+            H,
+            &SolverFeedback::default(),
+        )
     }
 }
 
@@ -469,7 +477,7 @@ fn filter_mode_only_corrects_the_normal_position() {
         let mut v = [G * H];
         let mut x = [x0[0] + v[0] * H];
         let before = x[0];
-        st.resolve(&x0, &mut x, &mut v, &[1.0], H);
+        st.resolve(&x0, &mut x, &mut v, &[1.0], H, &SolverFeedback::default());
         assert_eq!(st.contacts().len(), 1);
         assert!((st.contacts()[0].normal - n).length() < 1e-12);
         assert!(v[0].length() < 1e-12, "stuck: {}", v[0]);

@@ -1,6 +1,7 @@
 //! Cloth-cloth collision at stage level: particles with triangle topology (no internal forces,
 //! the harshest case: nothing but collisions keeps layers apart), semi-implicit Euler in the test.
 
+use drape::collide::SolverFeedback;
 use drape::collide::{CollisionSettings, CollisionStage, DetectionMode, Obstacle};
 use drape::{Pose, Vec3};
 
@@ -85,9 +86,14 @@ impl Run {
                     self.x[i] += self.v[i] * H;
                 }
             }
-            let rep = self
-                .stage
-                .resolve(&x0, &mut self.x, &mut self.v, &self.w, H);
+            let rep = self.stage.resolve(
+                &x0,
+                &mut self.x,
+                &mut self.v,
+                &self.w,
+                H,
+                &SolverFeedback::default(),
+            );
             if check {
                 assert_eq!(rep.self_intersections, Some(0), "step {s}: {rep:?}");
                 assert_eq!(rep.unresolved, 0, "step {s}");
@@ -251,7 +257,14 @@ fn intersection_count_detects_crossing_sheets() {
     let mut run = Run::new(x.clone(), t, true, DetectionMode::Continuous);
     let mut x1 = x.clone();
     let mut v = vec![Vec3::ZERO; x.len()];
-    let rep = run.stage.resolve(&x, &mut x1, &mut v, &run.w.clone(), H);
+    let rep = run.stage.resolve(
+        &x,
+        &mut x1,
+        &mut v,
+        &run.w.clone(),
+        H,
+        &SolverFeedback::default(),
+    );
     assert!(rep.self_intersections.unwrap_or(0) > 0, "{rep:?}");
     // The step started intersecting, so nothing can be resolved by motion: x1 stays at x0.
     assert_eq!(x1, x);

@@ -32,6 +32,7 @@ mod wedge;
 pub use contact::Contact;
 pub use error::StageError;
 pub use features::{FeatureContact, DEEP as FEATURE_DEEP};
+pub use feedback::SolverFeedback;
 pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};

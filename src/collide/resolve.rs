@@ -3,6 +3,7 @@
 //! vertices they moved again), cloth against itself, then the penetration metric.
 
 use super::features::ClothState;
+use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
 use super::report::CollisionReport;
 use super::stage::CollisionStage;
@@ -12,7 +13,8 @@ use std::time::Instant;
 
 impl CollisionStage {
     /// Fixes candidate end-of-step positions `x1` and velocities `v1` (start positions `x0`, step
-    /// `h`). Vertices with `inv_mass == 0` are never moved.
+    /// `h`). Vertices with `inv_mass == 0` are never moved. `feedback` is what the solver did in
+    /// this substep (the default when it held nothing; see [`SolverFeedback`]).
     pub fn resolve(
         &mut self,
         x0: &[Vec3],
@@ -20,6 +22,7 @@ impl CollisionStage {
         v1: &mut [Vec3],
         inv_mass: &[f64],
         h: f64,
+        feedback: &SolverFeedback,
     ) -> CollisionReport {
         let start = Instant::now();
         let n = self
@@ -34,7 +37,7 @@ impl CollisionStage {
         let mode = self.settings.mode;
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
-        self.vertex_pass(x0, x1, v1, inv_mass, h, n, None);
+        self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, None);
         let by_vertex = contacts_by_vertex(&self.contacts);
         let (obs, th) = (&self.obstacles, &self.thickness);
         let pinched = center_pinched(obs, th, &by_vertex, x0, x1, v1, n);
@@ -52,8 +55,8 @@ impl CollisionStage {
             friction: &self.friction[..n],
             h,
             mode,
-            friction_solved: &self.friction_solved,
-            sprung: &self.sprung,
+            friction_solved: feedback.friction_solved_all(),
+            sprung: feedback.sprung(),
         };
         self.feature_contacts.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);
@@ -83,7 +86,7 @@ impl CollisionStage {
         if report.feature_contacts > 0 {
             // A face pushed off a feature can carry a vertex into the obstacle's faces: test the
             // moved vertices again, keeping the latest contact per (obstacle, vertex).
-            self.vertex_pass(x0, x1, v1, inv_mass, h, n, Some(&moved));
+            self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, Some(&moved));
             self.contacts.sort_by_key(|c| (c.obstacle, c.vertex));
             self.contacts.reverse();
             self.contacts.dedup_by_key(|c| (c.obstacle, c.vertex));
@@ -96,9 +99,6 @@ impl CollisionStage {
             separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;
-        self.held.clear();
-        self.friction_solved.clear();
-        self.sprung.clear();
         if let Some(sc) = self.self_collider.as_mut() {
             let out = sc.resolve(
                 &self.settings,

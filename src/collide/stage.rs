@@ -7,7 +7,6 @@ use super::broad::Aabb;
 use super::contact::Contact;
 use super::error::StageError;
 use super::features::{FeatureCollider, FeatureContact, Features};
-use super::feedback::Held;
 use super::obstacle::Obstacle;
 use super::self_contact::SelfCollider;
 use super::settings::CollisionSettings;
@@ -39,18 +38,8 @@ pub struct CollisionStage {
     pub(super) culling: bool,
     /// Per obstacle: near enough to the cloth to be tested this step.
     pub(super) near: Vec<bool>,
-    /// Per vertex, the normals and normal velocity changes (m/s) the implicit solver's contact
-    /// filter applied this step, one per held surface (see `set_held`); used once by the next
-    /// `resolve`.
-    pub(super) held: Vec<Held>,
-    /// Per vertex: the normals of held surfaces whose friction the solver applied (zero:
-    /// unused; see `set_friction_solved`); used once by the next `resolve`.
-    pub(super) friction_solved: Vec<[Vec3; 3]>,
     /// The last `resolve`'s contacts of static obstacles' edges and corners.
     pub(super) feature_contacts: Vec<FeatureContact>,
-    /// The cloth faces and edges (`verts` of [`super::FeatureContact`]) the solver held with
-    /// an edge spring this step, sorted; see `set_sprung`. Used once by the next `resolve`.
-    pub(super) sprung: Vec<[u32; 3]>,
 }
 
 impl CollisionStage {
@@ -99,10 +88,7 @@ impl CollisionStage {
             features,
             feature_collider,
             feature_moved: Vec::new(),
-            held: Vec::new(),
-            friction_solved: Vec::new(),
             feature_contacts: Vec::new(),
-            sprung: Vec::new(),
             obstacles,
             n_vertices,
             thickness,
@@ -138,60 +124,10 @@ impl CollisionStage {
         &self.contacts
     }
 
-    /// Records that the solver held `vertex` against a surface of normal `normal` this step,
-    /// removing the normal velocity `dvn` (m/s, >= 0) that gravity would have given it (the
-    /// caller's estimate of the filter's normal impulse per unit mass).
-    /// The filter takes the normal impulse out of the stage's sight (the vertex arrives with no
-    /// approaching velocity), so Coulomb friction in the next `resolve` adds `dvn` to the normal
-    /// velocity change it sees; without it a held vertex slides frictionless. A vertex held by
-    /// several surfaces (a wedge) gets one call per surface; a fourth one is ignored.
-    pub fn set_held(&mut self, vertex: usize, normal: Vec3, dvn: f64) {
-        if vertex >= self.n_vertices || !(dvn.is_finite() && dvn > 0.0) || !normal.is_finite() {
-            return;
-        }
-        if self.held.len() != self.n_vertices {
-            self.held.clear();
-            self.held.resize(self.n_vertices, [(Vec3::ZERO, 0.0); 3]);
-        }
-        if let Some(slot) = self.held[vertex].iter_mut().find(|s| s.1 == 0.0) {
-            *slot = (normal, dvn);
-        }
-    }
-
-    /// Records that the solver applied the Coulomb friction of the surface with `normal` to
-    /// `vertex` (held against it, see `set_held`): the next `resolve` leaves the tangential
-    /// velocity of that contact alone instead of applying friction a second time.
-    pub fn set_friction_solved(&mut self, vertex: usize, normal: Vec3) {
-        if vertex >= self.n_vertices || !normal.is_finite() {
-            return;
-        }
-        if self.friction_solved.len() != self.n_vertices {
-            self.friction_solved.clear();
-            self.friction_solved
-                .resize(self.n_vertices, [Vec3::ZERO; 3]);
-        }
-        if let Some(slot) = self.friction_solved[vertex]
-            .iter_mut()
-            .find(|s| **s == Vec3::ZERO)
-        {
-            *slot = normal;
-        }
-    }
-
     /// The last `resolve`'s contacts of static obstacles' edges and corners with cloth faces and
     /// edges, for the implicit solver to hold as springs next substep.
     pub fn feature_contacts(&self) -> &[FeatureContact] {
         &self.feature_contacts
-    }
-
-    /// Records which feature contacts (their cloth faces and edges, `verts` of
-    /// [`super::FeatureContact`]) the solver held with edge springs this step: the next `resolve`
-    /// leaves those to the solver unless they end deep (see `features::DEEP`).
-    pub fn set_sprung(&mut self, contacts: impl IntoIterator<Item = [u32; 3]>) {
-        self.sprung.clear();
-        self.sprung.extend(contacts);
-        self.sprung.sort_unstable();
-        self.sprung.dedup();
     }
 
     /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the

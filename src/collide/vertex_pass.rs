@@ -2,6 +2,7 @@
 //! box against every near obstacle, answered by [`super::respond::obstacle_vertex`].
 
 use super::broad::Aabb;
+use super::feedback::SolverFeedback;
 use super::respond::{obstacle_vertex, VertexInput};
 use super::stage::CollisionStage;
 use crate::Vec3;
@@ -61,6 +62,7 @@ impl CollisionStage {
         inv_mass: &[f64],
         h: f64,
         n: usize,
+        feedback: &SolverFeedback,
         only: Option<&[bool]>,
     ) {
         let mode = self.settings.mode;
@@ -120,8 +122,7 @@ impl CollisionStage {
             // independent within one obstacle), in vertex order.
             let x1r: &[Vec3] = x1;
             let v1r: &[Vec3] = v1;
-            let held = &self.held;
-            let friction_solved = &self.friction_solved;
+            let friction_solved = feedback.friction_solved_all();
             self.scratch.clear();
             self.scratch.par_extend(
                 self.candidates
@@ -137,7 +138,7 @@ impl CollisionStage {
                             h,
                             mode,
                             response,
-                            held: held.get(i).copied().unwrap_or([(Vec3::ZERO, 0.0); 3]),
+                            held: feedback.held(i),
                             friction_solved: friction_solved
                                 .get(i)
                                 .copied()

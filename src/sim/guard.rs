@@ -1,7 +1,21 @@
 //! The divergence guard: every substep checks the integrator's output for non-finite values,
-//! runaway energy and impossible speeds, and names the likely culprit when it fails.
+//! runaway energy and impossible speeds, and names the likely culprit when it fails. It owns
+//! its bookkeeping across substeps (the energy budget, the recent energy levels, the energy of
+//! the current state) and the checks themselves.
+//!
+//! Runaway energy: over one substep the total energy may grow by the work of wind and driven
+//! vertices, plus `energy_growth` times the recent peak dynamic energy, plus the first-order
+//! error an explicit step makes under gravity (`h sum m |g| |v|`). An instability multiplies the
+//! dynamic energy every step and trips this within a few steps; a stable step never comes
+//! close. Over the run, the total energy may not exceed the budget: the initial energy plus all
+//! the work done on the cloth from outside (wind, driven vertices, moving obstacles, released
+//! vertices) and the allowances spent.
 
-use crate::effects::StiffnessBound;
+use super::energy::Energies;
+use super::error::{DivergenceError, Symptom};
+use super::scan::scan_vertices;
+use crate::cloth::Cloth;
+use crate::effects::{EffectSet, State};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -40,76 +54,6 @@ impl Default for GuardSettings {
     }
 }
 
-/// Why a substep was rejected.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Symptom {
-    NonFinite,
-    Speed(f64),
-    /// Energy gained beyond the external work, in joules.
-    EnergyGain {
-        gained: f64,
-        allowed: f64,
-    },
-}
-
-/// A simulation that diverged and could not be rescued by the policy.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DivergenceError {
-    pub time: f64,
-    pub step: f64,
-    pub cloth: String,
-    /// Vertex index within its cloth piece.
-    pub vertex: usize,
-    pub symptom: Symptom,
-    pub integrator: &'static str,
-    /// The stiffest elastic effect, with `h * omega` for the failed step.
-    pub suspect: Option<(StiffnessBound, f64)>,
-    pub stability_limit: Option<f64>,
-}
-
-impl fmt::Display for DivergenceError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "cloth '{}' diverged at t = {:.4} s (step {:.3e} s, {}): vertex {} ",
-            self.cloth, self.time, self.step, self.integrator, self.vertex
-        )?;
-        match &self.symptom {
-            Symptom::NonFinite => write!(f, "has a non-finite position or velocity")?,
-            Symptom::Speed(s) => write!(f, "moves at {s:.3e} m/s")?,
-            Symptom::EnergyGain { gained, allowed } => write!(
-                f,
-                "is where energy runs away ({gained:.3e} J gained in one step, {allowed:.3e} J explained)"
-            )?,
-        }
-        if let Some((b, h_omega)) = &self.suspect {
-            write!(
-                f,
-                "; likely cause: {} (h*omega = {:.3}",
-                b.parameter, h_omega
-            )?;
-            if let Some(limit) = self.stability_limit {
-                write!(
-                    f,
-                    ", stability limit of {} is {:.3}",
-                    self.integrator, limit
-                )?;
-            }
-            write!(
-                f,
-                "): lower dt, raise solver.substeps or soften {}",
-                b.parameter
-            )?;
-            if self.integrator != "implicit" {
-                write!(f, ", or use the implicit integrator")?;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for DivergenceError {}
-
 impl fmt::Display for DivergencePolicy {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
@@ -119,166 +63,345 @@ impl fmt::Display for DivergencePolicy {
     }
 }
 
-/// What the guard needs from one pass over the vertices of a substep's result.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct VertexScan {
-    /// False when some position or velocity may be non-finite (the caller then finds the first
-    /// bad vertex with an exact scan; a false alarm on sums that overflow is harmless).
-    pub finite: bool,
-    /// Largest squared speed.
-    pub speed2: f64,
-    /// `sum m |v|^2 / 2` over all vertices.
-    pub kinetic: f64,
-    /// `sum m max(|v|, |v0|)`, the speed sum of the gravity error bound.
-    pub mass_speed: f64,
-    /// `sum m`.
-    pub mass: f64,
+/// What the guard looks at after a solve: the end state (in the cloth) and the start state it
+/// may roll back to.
+pub(super) struct Sample<'a> {
+    pub cloth: &'a Cloth,
+    pub effects: &'a EffectSet,
+    pub x0: &'a [Vec3],
+    pub v0: &'a [Vec3],
 }
 
-impl VertexScan {
-    /// The scan of two vertex ranges together (in a fixed order: results depend on the split
-    /// only, not on thread timing).
-    pub fn merge(&self, b: &VertexScan) -> VertexScan {
-        VertexScan {
-            finite: self.finite && b.finite,
-            speed2: self.speed2.max(b.speed2),
-            kinetic: self.kinetic + b.kinetic,
-            mass_speed: self.mass_speed + b.mass_speed,
-            mass: self.mass + b.mass,
+/// A substep the guard accepted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Accepted {
+    /// Energies of the end state.
+    pub energies: Energies,
+    /// Allowance spent: external work, gravity error bound and the rounding floor (J).
+    pub spent: f64,
+    /// Largest squared vertex speed of the end state.
+    pub speed2: f64,
+}
+
+/// The guard's bookkeeping across substeps.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Guard {
+    /// Energy of the current state, if known (saves one evaluation per substep).
+    energy_cache: Option<Energies>,
+    /// Largest squared vertex speed of the current state when the guard's scan measured it
+    /// (cleared by anything that changes velocities after the scan, e.g. collisions).
+    scanned_speed2: Option<f64>,
+    /// Dynamic energy of the last substeps: the guard's reference level, so that the bounded
+    /// energy oscillation of a stable symplectic step is not mistaken for a blow-up.
+    recent_energy: [f64; 16],
+    /// Upper bound of the total energy the cloth may have by now: its initial energy plus all the
+    /// work done on it from outside (and the allowed integration error). `None` until first set.
+    energy_budget: Option<f64>,
+    /// Scale of the budget's slack: initial dynamic energy plus the allowances spent.
+    budget_scale: f64,
+    substep_count: usize,
+}
+
+impl Guard {
+    /// A new phase (another cloth): the energy bookkeeping starts over.
+    pub fn restart(&mut self) {
+        self.energy_cache = None;
+        self.recent_energy = [0.0; 16];
+        self.energy_budget = None;
+        self.budget_scale = 0.0;
+    }
+
+    /// The cloth changed outside a step (vertices attached or released): its energy is unknown.
+    pub fn forget_energy(&mut self) {
+        self.energy_cache = None;
+    }
+
+    /// The energy of the current state, if known.
+    pub fn energy(&self) -> Option<Energies> {
+        self.energy_cache
+    }
+
+    /// The largest squared speed of the current state, if the guard's scan measured it.
+    pub fn scanned_speed2(&self) -> Option<f64> {
+        self.scanned_speed2
+    }
+
+    /// A new frame step begins.
+    pub fn start_frame(&mut self) {
+        self.scanned_speed2 = None;
+    }
+
+    /// Energies at the start of a substep (the cached ones when known).
+    pub fn start_energies(&self, cloth: &Cloth, effects: &EffectSet) -> Energies {
+        match self.energy_cache {
+            Some(e) => e,
+            None => Energies::of(cloth, effects),
         }
     }
-}
 
-/// Lanes of the vertex scan: independent accumulators the compiler keeps in SIMD registers.
-const LANES: usize = 4;
-
-/// One branch-free pass over positions `x`, velocities `v`, start velocities `v0` and masses
-/// (equal lengths). Sums run in [`LANES`] interleaved accumulators, so they differ from a
-/// sequential sum at rounding level only.
-pub(crate) fn scan_vertices(x: &[Vec3], v: &[Vec3], v0: &[Vec3], mass: &[f64]) -> VertexScan {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { scan_vertices_avx2(x, v, v0, mass) };
+    /// Kinetic energy `gained` (J) was given to the cloth from outside (released vertices).
+    pub fn widen(&mut self, gained: f64) {
+        if let Some(b) = self.energy_budget.as_mut() {
+            *b += gained;
+        }
+        self.budget_scale += gained;
+        self.energy_cache = None;
     }
-    scan_vertices_lanes(x, v, v0, mass)
-}
 
-/// [`scan_vertices_lanes`] with the lane arithmetic in AVX registers: each lane does the same
-/// operations in the same order (no fused multiply-adds), so the results are bitwise equal.
-///
-/// Safety: AVX2 is available.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn scan_vertices_avx2(x: &[Vec3], v: &[Vec3], v0: &[Vec3], mass: &[f64]) -> VertexScan {
-    use std::arch::x86_64::*;
-    let n = x.len().min(v.len()).min(v0.len()).min(mass.len());
-    let (x, v, v0, mass) = (&x[..n], &v[..n], &v0[..n], &mass[..n]);
-    let blocks = n / LANES * LANES;
-    let (zero, half) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5));
-    let (mut finite, mut speed2, mut kinetic, mut mass_speed, mut total) =
-        (zero, zero, zero, zero, zero);
-    for b in (0..blocks).step_by(LANES) {
-        // Component arrays of the block's positions, velocities and start velocities.
-        let mut c = [[0.0; LANES]; 9];
-        for l in 0..LANES {
-            let (p, w, w0) = (x[b + l], v[b + l], v0[b + l]);
-            for (k, value) in [p.x, p.y, p.z, w.x, w.y, w.z, w0.x, w0.y, w0.z]
-                .into_iter()
-                .enumerate()
-            {
-                c[k][l] = value;
+    /// Books an accepted substep that started at `e0`.
+    pub fn accept(&mut self, e0: Energies, a: Accepted) {
+        let (e0_total, e0_dynamic) = (e0.total(), e0.dynamic());
+        self.scanned_speed2 = Some(a.speed2);
+        if self.energy_budget.is_none() {
+            self.budget_scale = e0_dynamic;
+        }
+        self.energy_budget = Some(self.energy_budget.unwrap_or(e0_total) + a.spent);
+        self.budget_scale += a.spent;
+        self.energy_cache = Some(a.energies);
+        self.recent_energy[self.substep_count % 16] = a.energies.dynamic();
+        self.substep_count += 1;
+    }
+
+    /// The substep was rolled back to its start state of energy `e0`.
+    pub fn reject(&mut self, e0: Energies) {
+        self.energy_cache = Some(e0);
+    }
+
+    /// The collision stage changed the state to energy `after`: a moving obstacle can push
+    /// energy into the cloth, so the budget widens by any gain.
+    pub fn collided(&mut self, after: Energies) {
+        if let (Some(b), Some(budget)) = (self.energy_cache, self.energy_budget.as_mut()) {
+            *budget += (after.total() - b.total()).max(0.0);
+        }
+        self.energy_cache = Some(after);
+        self.scanned_speed2 = None;
+    }
+
+    /// Checks the integrator's output; returns the new energies or the first bad vertex.
+    /// `fext`: the forces from outside the cloth whose work over the substep is allowed (see
+    /// [`external_forces`]).
+    pub fn check(
+        &self,
+        g: &GuardSettings,
+        s: &Sample,
+        h: f64,
+        e0: Energies,
+        fext: Option<&[Vec3]>,
+    ) -> Result<Accepted, (usize, Symptom)> {
+        let c = s.cloth;
+        // One pass over the vertices: finiteness, the fastest speed, the kinetic energy, the
+        // speed sum of the gravity error bound and the total mass.
+        // The energy pass at the new state (whose position-only forces serve the next substep)
+        // runs on two threads for large cloths; each also scans its half of the vertices.
+        let v_save = s.v0;
+        let ((elastic, gravity_energy), scan, second) =
+            s.effects
+                .energy_split_with(&c.x, |r: std::ops::Range<usize>| {
+                    let (x, v, v0, m) = (
+                        &c.x[r.clone()],
+                        &c.v[r.clone()],
+                        &v_save[r.clone()],
+                        &c.mass[r],
+                    );
+                    scan_vertices(x, v, v0, m)
+                });
+        let scan = match second {
+            Some(b) => scan.merge(&b),
+            None => scan,
+        };
+        if !scan.finite {
+            let bad = (0..c.len()).find(|&i| !c.x[i].is_finite() || !c.v[i].is_finite());
+            if let Some(i) = bad {
+                return Err((i, Symptom::NonFinite));
             }
         }
-        // SAFETY: unaligned loads of local 4-element arrays and of `mass[b..b + 4]` (in bounds).
-        unsafe {
-            let ld = |k: usize| _mm256_loadu_pd(c[k].as_ptr());
-            let m = _mm256_loadu_pd(mass.as_ptr().add(b));
-            let (px, py, pz, wx, wy, wz) = (ld(0), ld(1), ld(2), ld(3), ld(4), ld(5));
-            let d = |a: __m256d| _mm256_mul_pd(a, zero);
-            let nan_test = _mm256_add_pd(
-                _mm256_add_pd(
-                    _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(d(px), d(py)), d(pz)), d(wx)),
-                    d(wy),
-                ),
-                d(wz),
-            );
-            finite = _mm256_add_pd(finite, nan_test);
-            let sq = |a: __m256d, b: __m256d, c: __m256d| {
-                _mm256_add_pd(
-                    _mm256_add_pd(_mm256_mul_pd(a, a), _mm256_mul_pd(b, b)),
-                    _mm256_mul_pd(c, c),
-                )
-            };
-            let v2 = sq(wx, wy, wz);
-            let v02 = sq(ld(6), ld(7), ld(8));
-            speed2 = _mm256_max_pd(speed2, v2);
-            kinetic = _mm256_add_pd(kinetic, _mm256_mul_pd(_mm256_mul_pd(half, m), v2));
-            let fastest = _mm256_sqrt_pd(_mm256_max_pd(v2, v02));
-            mass_speed = _mm256_add_pd(mass_speed, _mm256_mul_pd(m, fastest));
-            total = _mm256_add_pd(total, m);
+        // The first vertex at the top speed: only looked up when a check fails.
+        let fastest = || {
+            (0..c.len())
+                .find(|&i| c.v[i].length_squared() == scan.speed2)
+                .unwrap_or(0)
+        };
+        let (mut kinetic, mass_speed) = (scan.kinetic, scan.mass_speed);
+        let speed = scan.speed2.sqrt();
+        if speed > g.max_speed {
+            return Err((fastest(), Symptom::Speed(speed)));
+        }
+        for (i, _) in &c.kinematic {
+            kinetic -= 0.5 * c.mass[*i as usize] * c.v[*i as usize].length_squared();
+        }
+        let e1 = Energies {
+            kinetic,
+            elastic,
+            gravity: gravity_energy,
+        };
+        let (e0_total, e0_dynamic, e1_total) = (e0.total(), e0.dynamic(), e1.total());
+        if !e1_total.is_finite() {
+            return Err((fastest(), Symptom::NonFinite));
+        }
+        let work: f64 = match fext {
+            Some(f) => (0..c.len()).map(|i| f[i].dot(c.x[i] - s.x0[i]).abs()).sum(),
+            None => 0.0,
+        };
+        let gravity = s.effects.gravity().length();
+        let gravity_error = h * gravity * mass_speed;
+        let floor = 1e-12 * (1.0 + scan.mass);
+        let reference = self.recent_energy.iter().fold(e0_dynamic, |a, &b| a.max(b));
+        let allowed = work + g.energy_growth * reference + gravity_error + floor;
+        let gained = e1_total - e0_total;
+        if gained > allowed {
+            return Err((fastest(), Symptom::EnergyGain { gained, allowed }));
+        }
+        let spent = work + gravity_error + floor;
+        let budget = self.energy_budget.unwrap_or(e0_total) + spent;
+        let scale = if self.energy_budget.is_some() {
+            self.budget_scale
+        } else {
+            e0_dynamic
+        } + spent;
+        let over = e1_total - budget;
+        if over > g.energy_growth * scale + floor {
+            return Err((
+                fastest(),
+                Symptom::EnergyGain {
+                    gained: over,
+                    allowed: g.energy_growth * scale,
+                },
+            ));
+        }
+        Ok(Accepted {
+            energies: e1,
+            spent,
+            speed2: scan.speed2,
+        })
+    }
+
+    /// The guard's second opinion on a substep rejected for energy gain while attachments move:
+    /// the start-of-substep force underestimates the work of a driven vertex that stretches the
+    /// cloth within the substep (a robot link jumping to a new joint state), so each driven
+    /// vertex's work is bounded with the larger of its start and end forces (a bound for a force
+    /// that grows monotonically along the path; the trapezoid rule still fell ~20% short on the
+    /// robot towel). Wind forces stay start-of-substep. Only for unconditionally stable
+    /// integrators: there a large end force is the input's doing, while in an explicit blow-up
+    /// it would be the instability's and must not widen the allowance. `scratch` holds the end
+    /// forces.
+    #[allow(clippy::too_many_arguments)]
+    pub fn check_with_end_forces(
+        &self,
+        g: &GuardSettings,
+        s: &Sample,
+        t1: f64,
+        h: f64,
+        e0: Energies,
+        fext: &[Vec3],
+        scratch: &mut Vec<Vec3>,
+    ) -> Result<Accepted, (usize, Symptom)> {
+        let c = s.cloth;
+        let n = c.len();
+        crate::integrate::scratch(scratch, n);
+        let st = State {
+            t: t1,
+            x: &c.x,
+            v: &c.v,
+        };
+        s.effects.forces(&st, scratch);
+        let mut f = fext.to_vec();
+        for (i, _) in &c.kinematic {
+            let i = *i as usize;
+            let dx = c.x[i] - s.x0[i];
+            let end = -scratch[i];
+            if end.dot(dx).abs() > f[i].dot(dx).abs() {
+                f[i] = end;
+            }
+        }
+        self.check(g, s, h, e0, Some(&f))
+    }
+}
+
+/// Work done on the cloth during the substep by forces from outside it (wind and moving
+/// attachments), evaluated at the start state `(t, cloth.x, cloth.v)`, per unit displacement:
+/// writes the forces to `fext` and returns whether there are any (`scratch`: internal forces).
+pub(super) fn external_forces(
+    cloth: &Cloth,
+    effects: &EffectSet,
+    t: f64,
+    fext: &mut Vec<Vec3>,
+    scratch: &mut Vec<Vec3>,
+) -> bool {
+    let has_wind = effects.iter().any(|e| e.injects_energy());
+    let moving_attachments = cloth
+        .kinematic
+        .iter()
+        .any(|(i, _)| cloth.v[*i as usize] != Vec3::ZERO);
+    if !has_wind && !moving_attachments {
+        return false;
+    }
+    let s = State {
+        t,
+        x: &cloth.x,
+        v: &cloth.v,
+    };
+    let n = cloth.len();
+    crate::integrate::scratch(fext, n);
+    effects.injecting_forces(&s, fext);
+    if moving_attachments {
+        // Power a driven vertex puts into the cloth: minus the internal force on it times its
+        // velocity (gravity on the driven vertex itself does no work on the cloth).
+        crate::integrate::scratch(scratch, n);
+        effects.forces(&s, scratch);
+        for (i, _) in &cloth.kinematic {
+            let i = *i as usize;
+            fext[i] = -scratch[i];
         }
     }
-    let lanes = |a: __m256d| {
-        let mut out = [0.0; LANES];
-        // SAFETY: store to a local 4-element array.
-        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), a) };
-        out
+    true
+}
+
+/// Whether a substep of `h` exceeds the integrator's stability limit `h omega <= limit` for the
+/// bound `omega` (`omega^2 <=` the sum over elastic effects of their Gershgorin bounds), and the
+/// guard's policy allows halving it. Integrators without a limit (implicit) or with none at all
+/// (forward Euler, limit 0) are left to the reactive guard.
+pub(super) fn over_stability_limit(
+    g: &GuardSettings,
+    limit: Option<f64>,
+    h: f64,
+    depth: u32,
+    omega: impl FnOnce() -> f64,
+) -> bool {
+    if g.policy != DivergencePolicy::Subdivide || depth >= g.max_subdivisions {
+        return false;
+    }
+    let Some(limit) = limit.filter(|l| *l > 0.0) else {
+        return false;
     };
-    let mut acc = Accumulators {
-        finite: lanes(finite),
-        speed2: lanes(speed2),
-        kinetic: lanes(kinetic),
-        mass_speed: lanes(mass_speed),
-        total: lanes(total),
+    h * omega() > limit
+}
+
+/// The error for a substep of `h` at `t` that failed at `vertex` (flat index) with `symptom`.
+pub(super) fn divergence_error(
+    cloth: &Cloth,
+    effects: &EffectSet,
+    integrator: &'static str,
+    stability_limit: Option<f64>,
+    (t, h): (f64, f64),
+    vertex: usize,
+    symptom: Symptom,
+) -> DivergenceError {
+    let (name, local) = match cloth.piece_of(vertex) {
+        Some(p) => (p.name.clone(), vertex - p.first_vertex),
+        None => (String::from("?"), vertex),
     };
-    for i in blocks..n {
-        acc.add(i - blocks, x[i], v[i], v0[i], mass[i]);
+    let suspect = effects.stiffness(&cloth.mass).into_iter().next().map(|b| {
+        let ho = h * b.omega_sq.sqrt();
+        (b, ho)
+    });
+    DivergenceError {
+        time: t,
+        step: h,
+        cloth: name,
+        vertex: local,
+        symptom,
+        integrator,
+        suspect,
+        stability_limit,
     }
-    acc.finish()
-}
-
-/// Per-lane sums of the vertex scan.
-#[derive(Default)]
-struct Accumulators {
-    finite: [f64; LANES],
-    speed2: [f64; LANES],
-    kinetic: [f64; LANES],
-    mass_speed: [f64; LANES],
-    total: [f64; LANES],
-}
-
-impl Accumulators {
-    /// Adds one vertex to lane `l`.
-    #[inline(always)]
-    fn add(&mut self, l: usize, p: Vec3, w: Vec3, w0: Vec3, m: f64) {
-        // Zero for finite components, NaN as soon as one is infinite or NaN.
-        self.finite[l] +=
-            (p.x * 0.0) + (p.y * 0.0) + (p.z * 0.0) + (w.x * 0.0) + (w.y * 0.0) + (w.z * 0.0);
-        let v2 = w.length_squared();
-        self.speed2[l] = self.speed2[l].max(v2);
-        self.kinetic[l] += 0.5 * m * v2;
-        self.mass_speed[l] += m * v2.max(w0.length_squared()).sqrt();
-        self.total[l] += m;
-    }
-
-    fn finish(&self) -> VertexScan {
-        let sum = |a: [f64; LANES]| (a[0] + a[1]) + (a[2] + a[3]);
-        VertexScan {
-            finite: sum(self.finite) == 0.0,
-            speed2: self.speed2.iter().fold(0.0, |a, &b| a.max(b)),
-            kinetic: sum(self.kinetic),
-            mass_speed: sum(self.mass_speed),
-            mass: sum(self.total),
-        }
-    }
-}
-
-fn scan_vertices_lanes(x: &[Vec3], v: &[Vec3], v0: &[Vec3], mass: &[f64]) -> VertexScan {
-    let n = x.len().min(v.len()).min(v0.len()).min(mass.len());
-    let mut acc = Accumulators::default();
-    for i in 0..n {
-        acc.add(i % LANES, x[i], v[i], v0[i], mass[i]);
-    }
-    acc.finish()
 }

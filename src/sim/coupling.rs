@@ -1,0 +1,382 @@
+//! The solver–collision coupling, both ways, in one place.
+//!
+//! Collision runs once per substep, after the solve; its contacts reach the solver only as the
+//! next substep's constraints, and the solver's answer reaches the stage only as an explicit
+//! [`SolverFeedback`] input of the next `resolve`:
+//!
+//! - **in** ([`Coupling::contacts_in`]): the last pass's obstacle contacts become the filter
+//!   `S = I - n n^T` of the vertices they press (a wedge's two or three normals together, see
+//!   [`HeldNormals`]), with the Coulomb friction of static surfaces when the integrator solves
+//!   it; static obstacles' edges and corners that touch the cloth between vertices become
+//!   one-sided springs when the integrator solves them.
+//! - **out** ([`Coupling::solved`], [`Coupling::feedback_out`]): the springs' end forces become
+//!   the next substep's friction limits; the filter's normal impulse on each held vertex
+//!   becomes the stage's friction bound for it (and in-solve friction's next limits), and the
+//!   contacts whose friction or spring the solver applied are marked so the stage does not
+//!   answer them a second time.
+
+use crate::cloth::Cloth;
+use crate::collide::{CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
+use crate::effects::{EffectSet, State};
+use crate::integrate::{Constraints, ContactSpring, Filter, Friction};
+use crate::Vec3;
+
+/// `k h^2 / m` of an edge spring at the contact point's mass `m`: the spring stops the point
+/// within a step, and a load of the cloth's own weight per vertex deflects it by `g h^2 / 1e3`
+/// (a micrometre at 120 Hz). Springs as stiff as the cloth's stiffest mode (`m omega^2`, 40
+/// times stiffer in tests/table_edge.rs) made the re-detection's drift of micrometres into
+/// newtons and slowed a frictionless strip sliding over the edge (0.39 m instead of 0.57 m in
+/// 2 s).
+const CONTACT_STIFFNESS: f64 = 1e3;
+
+/// Which contact terms the integrator solves itself (the others stay with the stage).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Solves {
+    pub friction: bool,
+    pub contacts: bool,
+}
+
+/// The coupling's state: this substep's constraints and holds, the lagged forces of the last
+/// solve, and the feedback for the stage.
+#[derive(Debug, Default)]
+pub(super) struct Coupling {
+    /// The solver's constraints of this substep (filter, target velocities, friction, springs).
+    pub constraints: Constraints,
+    /// This substep's held vertices: (vertex, surfaces, largest Coulomb coefficient).
+    held: Vec<(usize, HeldNormals, f64)>,
+    /// Per vertex, the normals the last substep's solve held it against with their Coulomb
+    /// limits `mu N` (N; 0: unused): the lagged normal forces of in-solve friction.
+    friction_limit: Vec<[(Vec3, f64); 3]>,
+    /// The last substep's edge springs (cloth face or edge) and their end forces (N), sorted.
+    spring_forces: Vec<([u32; 3], f64)>,
+    /// What the solver did this substep, for the stage's `resolve`.
+    pub feedback: SolverFeedback,
+}
+
+/// What the coupling reads at the start of a substep.
+pub(super) struct StartState<'a> {
+    pub cloth: &'a Cloth,
+    pub effects: &'a EffectSet,
+    pub t: f64,
+    /// The scene's substep (not a subdivided one).
+    pub h_scene: f64,
+}
+
+impl Coupling {
+    /// A new substep for `n` vertices: every vertex free, no friction, no feedback yet.
+    pub fn begin(&mut self, n: usize) {
+        if self.constraints.filter.len() != n {
+            self.constraints = Constraints::free(n);
+        } else {
+            self.constraints.filter.fill(Filter::Free);
+        }
+        self.constraints.friction.clear();
+        self.feedback.clear(n);
+    }
+
+    /// A new cloth of `n` vertices (the lagged forces are kept, as they were).
+    pub fn replace_cloth(&mut self, n: usize) {
+        self.constraints = Constraints::free(n);
+    }
+
+    /// Kinematic vertex `i` moves at `velocity` this substep.
+    pub fn fix(&mut self, i: usize, velocity: Vec3) {
+        self.constraints.filter[i] = Filter::Fixed;
+        self.constraints.target_velocity[i] = velocity;
+    }
+
+    /// Contacts in: the last collision pass's contacts become this substep's constraints
+    /// (edge springs first, then the held vertices' filter and friction). `scratch` holds the
+    /// start forces.
+    pub fn contacts_in(
+        &mut self,
+        stage: Option<&CollisionStage>,
+        s: &StartState,
+        solves: Solves,
+        scratch: &mut Vec<Vec3>,
+    ) {
+        self.edge_springs(stage, s, solves);
+        self.contact_constraints(stage, s, solves.friction, scratch);
+    }
+
+    /// The solve is done: its edge springs' end forces (`None` when it does not solve them)
+    /// are the normal forces of their friction next substep.
+    pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
+        self.spring_forces.clear();
+        if let Some(forces) = contact_forces {
+            self.spring_forces.extend(
+                self.constraints
+                    .contacts
+                    .iter()
+                    .zip(forces)
+                    .map(|(c, f)| (c.verts, *f)),
+            );
+            self.spring_forces.sort_by_key(|a| a.0);
+        }
+    }
+
+    /// Feedback out: the normal impulse per unit mass the filter gave each held vertex, for the
+    /// stage's friction; implicit Euler is `m (v1 - v0) = h f(x1, v1) + impulse`. The solver's
+    /// own constraint impulses when it reports them (`impulses`), else estimated from the end
+    /// forces (in `scratch`). Start-of-step forces, `f0 h / m`, overstate it up to 1e3 times
+    /// for a vertex pressed by springs that the implicit step relaxes: every held vertex then
+    /// stuck, and friction's projection back stretched the springs every step. Also sets
+    /// in-solve friction's Coulomb limits for the next substep: `mu N` of this solve's normal
+    /// impulses (zero for vertices not held now).
+    #[allow(clippy::too_many_arguments)]
+    pub fn feedback_out(
+        &mut self,
+        cloth: &Cloth,
+        effects: &EffectSet,
+        v0: &[Vec3],
+        (t, h): (f64, f64),
+        solves_friction: bool,
+        impulses: Option<&[Vec3]>,
+        scratch: &mut Vec<Vec3>,
+    ) {
+        let n = cloth.len();
+        self.friction_limit.clear();
+        self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
+        if self.held.is_empty() {
+            return;
+        }
+        if impulses.is_none() {
+            crate::integrate::scratch(scratch, n);
+            let s = State {
+                t: t + h,
+                x: &cloth.x,
+                v: &cloth.v,
+            };
+            effects.forces(&s, scratch);
+        }
+        for (i, normals, mu) in &self.held {
+            let i = *i;
+            let m = cloth.mass[i];
+            // The solver's own constraint impulse when it reports one: the estimate below also
+            // holds the linearisation error of a stretched cloth's end-state forces (up to 1e4
+            // times the real normal force), and as friction's normal force it made stretched
+            // cloth stick harder the more it was stretched.
+            let dv = match impulses.and_then(|r| r.get(i)) {
+                Some(r) => *r / m,
+                None => cloth.v[i] - v0[i] - scratch[i] * (h / m),
+            };
+            let split = normals.split(dv);
+            for (normal, dvn) in normals.normals().iter().zip(split) {
+                self.feedback.hold(i, *normal, dvn);
+            }
+            if solves_friction {
+                for (normal, surface) in normals.normals().iter().zip(normals.surfaces()) {
+                    if *surface == Vec3::ZERO {
+                        self.feedback.friction_solved(i, *normal);
+                    }
+                }
+                for (slot, (normal, l)) in self.friction_limit[i]
+                    .iter_mut()
+                    .zip(normals.normals().iter().zip(split))
+                {
+                    *slot = (*normal, mu * l.max(0.0) * m / h);
+                }
+            }
+        }
+    }
+
+    /// Static obstacle edges and corners the cloth touched in the last collision pass become
+    /// one-sided springs of this substep when the integrator solves them (see
+    /// [`ContactSpring`]), with in-solve Coulomb friction whose limit is `mu` times the force
+    /// the same contact's spring ended the last substep with, shared by weight. The stage then
+    /// leaves those contacts to the solver unless they end deep.
+    fn edge_springs(&mut self, stage: Option<&CollisionStage>, s: &StartState, solves: Solves) {
+        self.constraints.contacts.clear();
+        if !solves.contacts {
+            return;
+        }
+        // The scene's substep, not a subdivided one: a spring stiffened by `1 / h^2` as the guard
+        // halves the step would only store more energy in a contact that is already deep.
+        let h = s.h_scene;
+        let n = s.cloth.len();
+        let Some(stage) = stage else {
+            return;
+        };
+        let (mass, filter) = (&s.cloth.mass, &self.constraints.filter);
+        let lagged = &self.spring_forces;
+        let mut sprung = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        for c in stage.feature_contacts() {
+            // A face or edge answered in two passes is one contact: keep the first.
+            if c.verts.iter().any(|&v| v as usize >= n) || !seen.insert(c.verts) {
+                continue;
+            }
+            let mut spring = ContactSpring {
+                verts: c.verts,
+                weights: c.weights,
+                normal: c.normal,
+                point: c.point,
+                gap: c.gap,
+                stiffness: 0.0,
+                friction: 0.0,
+            };
+            // `k h^2 / m` at the contact point's mass.
+            let m: f64 = spring.slots().map(|(i, w)| w * mass[i]).sum();
+            spring.stiffness = CONTACT_STIFFNESS * m / (h * h);
+            let movable = spring.slots().any(|(i, _)| filter[i] != Filter::Fixed);
+            // A contact already deep (cloth pinched below its thickness under a press that
+            // stopped) stays with the collision stage's pinch and push: as a spring it would
+            // start with a large stored force (17 J released in one step, measured).
+            let deep = spring.depth(&s.cloth.x) > (1.0 - FEATURE_DEEP) * c.gap;
+            if !spring.is_valid(n) || !movable || deep {
+                continue;
+            }
+            // The normal force of the last solve's spring on this face or edge (none for a new
+            // contact: the collision stage gave it friction): the start depth holds the
+            // re-detection's drift, micrometres that the stiff spring turns into newtons.
+            let normal_force = lagged
+                .binary_search_by(|l| l.0.cmp(&c.verts))
+                .map_or(0.0, |k| lagged[k].1);
+            if solves.friction {
+                spring.friction = c.mu * normal_force;
+            }
+            sprung.push(c.verts);
+            self.constraints.contacts.push(spring);
+        }
+        self.feedback.set_sprung(sprung);
+    }
+
+    /// Contacts of the last collision pass become constraints of this substep (the survey's mass
+    /// modification, `S = I - n n^T`) when the scene's response asks for the filter. A contact
+    /// whose vertex is pulled away from the surface by the other forces is released instead of
+    /// held. A vertex held by two or three surfaces keeps its velocity along all their normals
+    /// (see [`HeldNormals`]). Records the held vertices with their normals.
+    fn contact_constraints(
+        &mut self,
+        stage: Option<&CollisionStage>,
+        s: &StartState,
+        solves_friction: bool,
+        scratch: &mut Vec<Vec3>,
+    ) {
+        self.held.clear();
+        let Some(stage) = stage else {
+            return;
+        };
+        if !stage.settings().response.uses_filter() || stage.contacts().is_empty() {
+            return;
+        }
+        let n = s.cloth.len();
+        crate::integrate::scratch(scratch, n);
+        let st = State {
+            t: s.t,
+            x: &s.cloth.x,
+            v: &s.cloth.v,
+        };
+        s.effects.forces(&st, scratch);
+        // The contacts grouped by vertex (in contact order within a vertex).
+        let mut contacts: Vec<(usize, Vec3, Vec3, usize)> = stage
+            .contacts()
+            .iter()
+            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity, c.obstacle))
+            .filter(|&(i, _, _, _)| i < n && self.constraints.filter[i] != Filter::Fixed)
+            .collect();
+        contacts.sort_by_key(|c| c.0);
+        self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
+        let mut friction = Vec::new();
+        for group in contacts.chunk_by(|a, b| a.0 == b.0) {
+            let i = group[0].0;
+            let f = scratch[i];
+            let Some(normals) = pressing_normals(group, f) else {
+                continue;
+            };
+            let (filter, target) = normals.filter();
+            self.constraints.filter[i] = filter;
+            self.constraints.target_velocity[i] = target;
+            let mu = group
+                .iter()
+                .map(|c| stage.friction_coefficient(i, c.3))
+                .fold(0.0, f64::max);
+            self.held.push((i, normals, mu));
+            if solves_friction {
+                self.held_friction(i, &normals, mu, f, &mut friction);
+            }
+        }
+        self.constraints.friction.extend(friction);
+    }
+
+    /// In-solve friction of vertex `i` held against `normals` (force `f` on it), one per surface:
+    /// each surface rubs with its own velocity (a cloth wedged between a moving hand and a
+    /// static torso is dragged by one and held by the other; one drag towards their mean
+    /// velocity with both limits summed dragged it at half the hand's speed with twice the
+    /// grip). The Coulomb limit is the last substep's `mu N` for that surface when the solve
+    /// held the vertex against it, else `mu` times the force pressing it into it now.
+    fn held_friction(
+        &self,
+        i: usize,
+        normals: &HeldNormals,
+        mu: f64,
+        f: Vec3,
+        out: &mut Vec<Friction>,
+    ) {
+        let lagged = self.friction_limit.get(i).copied().unwrap_or_default();
+        for (n, surface) in normals.normals().iter().zip(normals.surfaces()) {
+            if *surface != Vec3::ZERO {
+                // A moving surface does work through friction, and under a kinematic squeeze
+                // its normal force is unbounded: its friction stays with the collision stage,
+                // bounded by the normal impulses there.
+                continue;
+            }
+            let limit = match lagged.iter().find(|l| l.1 > 0.0 && l.0.dot(*n) > 0.9) {
+                Some(l) => l.1,
+                None => mu * (-f.dot(*n)).max(0.0),
+            };
+            if limit > 0.0 {
+                out.push(Friction {
+                    vertex: i as u32,
+                    limit,
+                    reference: *surface,
+                });
+            }
+        }
+    }
+}
+
+/// The surfaces a vertex with the contacts `group` (vertex, normal, surface velocity, obstacle) is held
+/// against this substep, given the force `f` on it, or `None` when it is released from all.
+///
+/// A contact whose surface the force pulls the vertex off is released, but not alone: the
+/// surfaces still held steer the vertex. In a wedge (cloth pressed by a moving slanted face
+/// against a table) the springs lift an edge vertex a little off the table while the face
+/// pushes it along its normal, which points into the table; released from the table, the
+/// solver drove it 9 mm through it in one substep and the collision stage's push back stored
+/// 0.7 J in the springs. So a released contact is taken back while the held ones' filtered
+/// force, or their surfaces' velocities, drive the vertex into its surface.
+fn pressing_normals(group: &[(usize, Vec3, Vec3, usize)], f: Vec3) -> Option<HeldNormals> {
+    let mut held: Vec<bool> = group.iter().map(|c| f.dot(c.1) <= 0.0).collect();
+    let build = |held: &[bool]| {
+        HeldNormals::from_contacts(
+            group
+                .iter()
+                .zip(held)
+                .filter(|(_, h)| **h)
+                .map(|(c, _)| (c.1, c.2)),
+        )
+    };
+    let mut normals = build(&held);
+    if normals.is_empty() {
+        return None;
+    }
+    // Each pass can only add contacts, so at most one pass per contact.
+    for _ in 0..group.len() {
+        let (filter, target) = normals.filter();
+        let f_free = filter.apply(f);
+        let driven = target - filter.apply(target);
+        let mut added = false;
+        for (c, h) in group.iter().zip(held.iter_mut()) {
+            if !*h && (f_free.dot(c.1) < 0.0 || (driven - c.2).dot(c.1) < 0.0) {
+                *h = true;
+                added = true;
+            }
+        }
+        if !added {
+            break;
+        }
+        normals = build(&held);
+    }
+    Some(normals)
+}

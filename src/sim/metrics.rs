@@ -1,0 +1,55 @@
+//! What one frame step did: the metrics every step reports, gathered from the solver's and
+//! the collision stage's reports of each substep.
+
+use crate::collide::CollisionReport;
+use crate::integrate::IntegratorStats;
+
+/// What one frame step did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepMetrics {
+    pub time: f64,
+    pub substeps: u32,
+    /// Substeps that were redone as smaller steps by the divergence guard.
+    pub subdivisions: u32,
+    pub force_evaluations: u32,
+    pub cg_iterations: u32,
+    pub cg_residual_max: f64,
+    pub kinetic_energy: f64,
+    pub potential_energy: f64,
+    pub max_speed: f64,
+    pub wall_time_s: f64,
+    /// Obstacle contacts at the end of the step.
+    pub contacts: usize,
+    /// Deepest penetration into an obstacle's thickness layer over the step's substeps (m).
+    pub deepest_penetration: f64,
+    /// Intersecting non-adjacent triangle pairs at the end of the step, when counted.
+    pub self_intersections: Option<usize>,
+    /// Cloth-cloth pairs the collision fail-safe could not resolve.
+    pub unresolved_contacts: usize,
+    pub collision_time_s: f64,
+    /// Obstacles skipped by the collision stage as far from the cloth (last substep).
+    pub culled_obstacles: usize,
+}
+
+impl StepMetrics {
+    /// Adds one solve's counts.
+    pub(super) fn add_solve(&mut self, stats: &IntegratorStats) {
+        self.force_evaluations += stats.force_evaluations;
+        self.cg_iterations += stats.cg_iterations;
+        self.cg_residual_max = self.cg_residual_max.max(stats.cg_residual);
+    }
+
+    /// Adds one collision pass: the last substep's contacts and culling, the deepest
+    /// penetration and intersection count over the substeps, the sums of the rest.
+    pub(super) fn add_collision(&mut self, r: &CollisionReport) {
+        self.contacts = r.contacts;
+        self.deepest_penetration = self.deepest_penetration.max(r.deepest_penetration);
+        self.self_intersections = match (self.self_intersections, r.self_intersections) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        self.unresolved_contacts += r.unresolved;
+        self.collision_time_s += r.time_s;
+        self.culled_obstacles = r.culled;
+    }
+}

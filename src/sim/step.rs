@@ -1,0 +1,308 @@
+//! `Simulation::step`: the order of one frame step, as a table of contents.
+//!
+//! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way
+//! (each stage below is one named call, with its inputs and outputs in its doc):
+//! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
+//! 2. coupling in: the last collision pass's contacts become the solver's constraints;
+//! 3. effects give forces and the integrator advances the state (the start state is kept);
+//! 4. kinematic vertices are put exactly on their end-of-substep targets;
+//! 5. the guard checks the result (and subdivides or stops per policy);
+//! 6. obstacles move over the substep;
+//! 7. coupling out: what the solver did becomes the collision stage's feedback;
+//! 8. collisions fix the new state; metrics are recorded.
+//!
+//! The guard's energy pass at the new state also computes the position-only forces there, which
+//! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
+//! guarded explicit substep costs one pass over the effects. The same pass scans the vertices for
+//! the guard (finiteness, speed, kinetic energy), on two threads for large cloths. The rollback
+//! state costs no copy: the start state's buffers are swapped out and the integrator writes the
+//! end state out of place ([`Integrator::step_into`]).
+//!
+//! [`EffectSet::energy_split`]: crate::effects::EffectSet::energy_split
+//! [`Integrator::step_into`]: crate::integrate::Integrator::step_into
+
+use super::coupling::{Solves, StartState};
+use super::energy::Energies;
+use super::error::{DivergenceError, Symptom};
+use super::guard::{self, DivergencePolicy, Sample};
+use super::metrics::StepMetrics;
+use super::simulation::Simulation;
+use crate::integrate::{Dynamics, IntegratorStats};
+use std::time::Instant;
+
+impl Simulation {
+    /// Advances one frame (`settings.dt`).
+    pub fn step(&mut self) -> Result<&StepMetrics, Box<DivergenceError>> {
+        let wall = Instant::now();
+        let mut m = StepMetrics::default();
+        let n_sub = self.settings.substeps.max(1);
+        let h = self.settings.dt / n_sub as f64;
+        let t0 = self.time;
+        self.guard.start_frame();
+        self.frames.script_targets(t0 + self.settings.dt);
+        for k in 0..n_sub {
+            let s0 = k as f64 / n_sub as f64;
+            let s1 = (k + 1) as f64 / n_sub as f64;
+            self.substep(t0 + k as f64 * h, h, s0, s1, 0, &mut m)?;
+        }
+        self.frames.finish_step();
+        for t in self.obstacle_targets.iter_mut() {
+            *t = None;
+        }
+        self.time = t0 + self.settings.dt;
+        let (ke, pe) = match self.guard.energy() {
+            Some(e) => (e.kinetic, e.elastic + e.gravity),
+            None => self.energy(),
+        };
+        m.time = self.time;
+        m.kinetic_energy = ke;
+        m.potential_energy = pe;
+        let speed2 = match self.guard.scanned_speed2() {
+            Some(s2) => s2,
+            None => (self.cloth.v.iter())
+                .map(|v| v.length_squared())
+                .fold(0.0, f64::max),
+        };
+        m.max_speed = speed2.sqrt();
+        m.wall_time_s = wall.elapsed().as_secs_f64();
+        self.last = m;
+        Ok(&self.last)
+    }
+
+    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence.
+    fn substep(
+        &mut self,
+        t: f64,
+        h: f64,
+        s0: f64,
+        s1: f64,
+        depth: u32,
+        m: &mut StepMetrics,
+    ) -> Result<(), Box<DivergenceError>> {
+        if self.over_stability_limit(h, depth) {
+            // Known to be unstable before trying: an explicit step over its limit is only caught
+            // by the energy check once the unstable mode carries a visible share of the energy,
+            // and that energy would stay in the cloth. Halve it up front instead.
+            return self.halves(t, h, (s0, s1), depth, m);
+        }
+        self.kinematic_targets(h, s0, s1);
+        self.coupling_in(t);
+        let e0 = self.guard.start_energies(&self.cloth, &self.model.effects);
+        let external = self.external_forces(t);
+        self.integrate(t, h, m);
+        self.snap_kinematic(s1);
+        if let Err((vertex, symptom)) = self.check(t, h, e0, external) {
+            self.roll_back(e0);
+            let g = self.settings.guard;
+            if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
+                return self.halves(t, h, (s0, s1), depth, m);
+            }
+            return Err(Box::new(self.divergence_error(t, h, vertex, symptom)));
+        }
+        if self.collision.is_some() {
+            self.move_obstacles(t, h, s1);
+            self.coupling_out(t, h);
+            self.collide(h, m);
+        }
+        m.substeps += 1;
+        Ok(())
+    }
+
+    /// The substep `(t, h)` over frame fractions `s0..s1` as two halves, one level deeper.
+    fn halves(
+        &mut self,
+        t: f64,
+        h: f64,
+        (s0, s1): (f64, f64),
+        depth: u32,
+        m: &mut StepMetrics,
+    ) -> Result<(), Box<DivergenceError>> {
+        m.subdivisions += 1;
+        let sm = 0.5 * (s0 + s1);
+        self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
+        self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m)
+    }
+
+    /// Whether the substep is over the integrator's stability limit (see
+    /// [`guard::over_stability_limit`]).
+    fn over_stability_limit(&mut self, h: f64, depth: u32) -> bool {
+        let limit = self.integrator.stability_limit();
+        let (model, mass) = (&mut self.model, &self.cloth.mass);
+        guard::over_stability_limit(&self.settings.guard, limit, h, depth, || {
+            model.omega_bound(mass)
+        })
+    }
+
+    /// 1. Kinematic vertices start on their target at `s0` and move at the constant velocity
+    /// that reaches the one at `s1`; the solver's filter fixes them at that velocity.
+    fn kinematic_targets(&mut self, h: f64, s0: f64, s1: f64) {
+        self.coupling.begin(self.cloth.len());
+        for (i, k) in &self.cloth.kinematic {
+            let (a, b) = (self.frames.target(k, s0), self.frames.target(k, s1));
+            let i = *i as usize;
+            self.cloth.x[i] = a;
+            self.cloth.v[i] = (b - a) / h;
+            self.coupling.fix(i, self.cloth.v[i]);
+        }
+    }
+
+    /// 2. Coupling in: the last collision pass's contacts become this substep's constraints
+    /// (filter, friction, edge springs); see [`super::coupling`].
+    fn coupling_in(&mut self, t: f64) {
+        let start = StartState {
+            cloth: &self.cloth,
+            effects: &self.model.effects,
+            t,
+            h_scene: self.settings.substep(),
+        };
+        let solves = Solves {
+            friction: self.integrator.solves_friction(),
+            contacts: self.integrator.solves_contacts(),
+        };
+        let stage = self.collision.as_ref();
+        let scratch = &mut self.work.scratch_f;
+        self.coupling.contacts_in(stage, &start, solves, scratch);
+    }
+
+    /// The forces from outside the cloth at the start of the substep, for the guard (into
+    /// `work.fext`); false when there are none.
+    fn external_forces(&mut self, t: f64) -> bool {
+        let (fext, scratch) = (&mut self.work.fext, &mut self.work.scratch_f);
+        guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
+    }
+
+    /// 3. Integrate: the start state moves to the save buffers (a swap, not a copy) and the
+    /// integrator writes the end state into the cloth's buffers; its contact forces go to the
+    /// coupling, its counts to the metrics.
+    fn integrate(&mut self, t: f64, h: f64, m: &mut StepMetrics) {
+        let n = self.cloth.len();
+        std::mem::swap(&mut self.work.x_save, &mut self.cloth.x);
+        std::mem::swap(&mut self.work.v_save, &mut self.cloth.v);
+        crate::integrate::scratch(&mut self.cloth.x, n);
+        crate::integrate::scratch(&mut self.cloth.v, n);
+        let stats: IntegratorStats = {
+            let d = Dynamics {
+                effects: &self.model.effects,
+                mass: &self.cloth.mass,
+                constraints: &self.coupling.constraints,
+            };
+            let start = (self.work.x_save.as_slice(), self.work.v_save.as_slice());
+            self.integrator
+                .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
+        };
+        self.coupling.solved(self.integrator.contact_forces());
+        m.add_solve(&stats);
+    }
+
+    /// 4. Kinematic vertices end exactly on target (no drift from round-off).
+    fn snap_kinematic(&mut self, s1: f64) {
+        for (i, k) in &self.cloth.kinematic {
+            self.cloth.x[*i as usize] = self.frames.target(k, s1);
+        }
+    }
+
+    /// 5. The guard's verdict on the solved substep started at energies `e0`; an accepted one
+    /// is booked. `external`: whether `work.fext` holds external forces.
+    fn check(
+        &mut self,
+        t: f64,
+        h: f64,
+        e0: Energies,
+        external: bool,
+    ) -> Result<(), (usize, Symptom)> {
+        let g = self.settings.guard;
+        let w = &mut self.work;
+        let s = Sample {
+            cloth: &self.cloth,
+            effects: &self.model.effects,
+            x0: &w.x_save,
+            v0: &w.v_save,
+        };
+        let mut verdict = self
+            .guard
+            .check(&g, &s, h, e0, external.then_some(w.fext.as_slice()));
+        if external
+            && self.integrator.stability_limit().is_none()
+            && matches!(verdict, Err((_, Symptom::EnergyGain { .. })))
+        {
+            let scratch = &mut w.scratch_f;
+            verdict = self
+                .guard
+                .check_with_end_forces(&g, &s, t + h, h, e0, &w.fext, scratch);
+        }
+        let accepted = verdict?;
+        self.guard.accept(e0, accepted);
+        Ok(())
+    }
+
+    /// The substep failed: the start state comes back from the save buffers.
+    fn roll_back(&mut self, e0: Energies) {
+        std::mem::swap(&mut self.cloth.x, &mut self.work.x_save);
+        std::mem::swap(&mut self.cloth.v, &mut self.work.v_save);
+        self.guard.reject(e0);
+    }
+
+    fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
+        guard::divergence_error(
+            &self.cloth,
+            &self.model.effects,
+            self.integrator.name(),
+            self.integrator.stability_limit(),
+            (t, h),
+            vertex,
+            symptom,
+        )
+    }
+
+    /// 6. Obstacles move over `[t, t + h]`: scripted ones by their motion, driven ones to
+    /// fraction `s1` of their frame targets.
+    fn move_obstacles(&mut self, t: f64, h: f64, s1: f64) {
+        let Some(stage) = self.collision.as_mut() else {
+            return;
+        };
+        stage.advance_obstacles(t, t + h);
+        for (idx, target) in self.obstacle_targets.iter().enumerate() {
+            if let Some((a, b)) = target {
+                stage.set_obstacle_pose(idx, a.lerp(b, s1));
+            }
+        }
+    }
+
+    /// 7. Coupling out: the solver's impulses on held vertices become the stage's feedback
+    /// (and in-solve friction's next limits); see [`super::coupling`].
+    fn coupling_out(&mut self, t: f64, h: f64) {
+        let solves_friction = self.integrator.solves_friction();
+        let impulses = self.integrator.constraint_impulses();
+        let (v0, scratch) = (&self.work.v_save, &mut self.work.scratch_f);
+        let (cloth, effects) = (&self.cloth, &self.model.effects);
+        self.coupling.feedback_out(
+            cloth,
+            effects,
+            v0,
+            (t, h),
+            solves_friction,
+            impulses,
+            scratch,
+        );
+    }
+
+    /// 8. Collisions fix the end state (kinematic vertices have infinite mass), with the
+    /// solver's feedback; the report goes to the metrics and the energy change to the guard.
+    fn collide(&mut self, h: f64, m: &mut StepMetrics) {
+        let Some(stage) = self.collision.as_mut() else {
+            return;
+        };
+        let inv_mass = &mut self.work.inv_mass;
+        inv_mass.clone_from(&self.cloth.mass);
+        inv_mass.iter_mut().for_each(|m| *m = 1.0 / *m);
+        for (i, _) in &self.cloth.kinematic {
+            inv_mass[*i as usize] = 0.0;
+        }
+        let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
+        let feedback = &self.coupling.feedback;
+        let r = stage.resolve(&self.work.x_save, x, v, inv_mass, h, feedback);
+        m.add_collision(&r);
+        self.guard
+            .collided(Energies::of(&self.cloth, &self.model.effects));
+    }
+}
