@@ -22,7 +22,8 @@ pub use guard::{DivergenceError, DivergencePolicy, GuardSettings, Symptom};
 use crate::cloth::{Cloth, Kinematic};
 use crate::collide::{CollisionStage, HeldNormals};
 use crate::effects::{EffectSet, State};
-use crate::integrate::{Constraints, Dynamics, Filter, Integrator, IntegratorStats};
+use crate::integrate::{Capabilities, Constraints, Dynamics, Integrator, StepReport};
+use crate::linalg::Filter;
 use crate::{Pose, Vec3};
 use std::time::Instant;
 
@@ -146,6 +147,10 @@ pub struct Simulation {
     pub cloth: Cloth,
     effects: EffectSet,
     integrator: Box<dyn Integrator>,
+    /// What the integrator is (asked once, at construction).
+    caps: Capabilities,
+    /// The integrator's report of the last step (its buffers reused across steps).
+    report: StepReport,
     pub frames: Frames,
     pub settings: StepSettings,
     constraints: Constraints,
@@ -197,6 +202,8 @@ impl Simulation {
         Self {
             cloth,
             effects,
+            caps: integrator.capabilities(),
+            report: StepReport::default(),
             integrator,
             frames,
             settings,
@@ -497,28 +504,36 @@ impl Simulation {
         // writes the end state into the cloth's buffers.
         std::mem::swap(&mut self.x_save, &mut self.cloth.x);
         std::mem::swap(&mut self.v_save, &mut self.cloth.v);
-        crate::integrate::scratch(&mut self.cloth.x, n);
-        crate::integrate::scratch(&mut self.cloth.v, n);
+        crate::linalg::scratch(&mut self.cloth.x, n);
+        crate::linalg::scratch(&mut self.cloth.v, n);
 
         // 2. Integrate.
-        let stats: IntegratorStats = {
+        {
             let d = Dynamics {
                 effects: &self.effects,
                 mass: &self.cloth.mass,
                 constraints: &self.constraints,
             };
             let start = (self.x_save.as_slice(), self.v_save.as_slice());
-            self.integrator
-                .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
-        };
+            self.integrator.step_into(
+                &d,
+                t,
+                h,
+                start,
+                &mut self.cloth.x,
+                &mut self.cloth.v,
+                &mut self.report,
+            );
+        }
+        let stats = &self.report;
         // Edge springs' end forces, the normal forces of their friction next substep.
         self.spring_forces.clear();
-        if let Some(forces) = self.integrator.contact_forces() {
+        if self.caps.solves_contacts {
             self.spring_forces.extend(
                 self.constraints
                     .contacts
                     .iter()
-                    .zip(forces)
+                    .zip(&stats.contact_forces)
                     .map(|(c, f)| (c.verts, *f)),
             );
             self.spring_forces.sort_by_key(|a| a.0);
@@ -535,7 +550,7 @@ impl Simulation {
         // 4. Guard.
         let mut verdict = self.check(h, e0, external.then_some(self.fext.as_slice()));
         if external
-            && self.integrator.stability_limit().is_none()
+            && self.caps.stability_limit.is_none()
             && matches!(verdict, Err((_, Symptom::EnergyGain { .. })))
         {
             verdict = self.check_with_end_forces(t + h, h, e0);
@@ -589,11 +604,11 @@ impl Simulation {
             // normal impulses (zero for vertices not held now).
             self.friction_limit.clear();
             self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
-            let solves_friction = self.integrator.solves_friction();
+            let solves_friction = self.caps.solves_friction;
             if !held.is_empty() {
-                let impulses = self.integrator.constraint_impulses();
+                let impulses = self.report.impulses();
                 if impulses.is_none() {
-                    crate::integrate::scratch(&mut self.scratch_f, n);
+                    crate::linalg::scratch(&mut self.scratch_f, n);
                     let s = State {
                         t: t + h,
                         x: &self.cloth.x,
@@ -669,7 +684,7 @@ impl Simulation {
         if g.policy != DivergencePolicy::Subdivide || depth >= g.max_subdivisions {
             return false;
         }
-        let Some(limit) = self.integrator.stability_limit().filter(|l| *l > 0.0) else {
+        let Some(limit) = self.caps.stability_limit.filter(|l| *l > 0.0) else {
             return false;
         };
         h * self.omega_bound() > limit
@@ -725,14 +740,14 @@ impl Simulation {
         /// edge (0.39 m instead of 0.57 m in 2 s).
         const CONTACT_STIFFNESS: f64 = 1e3;
         self.constraints.contacts.clear();
-        if !self.integrator.solves_contacts() {
+        if !self.caps.solves_contacts {
             return;
         }
         // The scene's substep, not a subdivided one: a spring stiffened by `1 / h^2` as the guard
         // halves the step would only store more energy in a contact that is already deep.
         let h = self.settings.dt / f64::from(self.settings.substeps.max(1));
         let n = self.cloth.len();
-        let solves_friction = self.integrator.solves_friction();
+        let solves_friction = self.caps.solves_friction;
         let Some(stage) = self.collision.as_mut() else {
             return;
         };
@@ -808,7 +823,7 @@ impl Simulation {
             return held;
         }
         let n = self.cloth.len();
-        crate::integrate::scratch(&mut self.scratch_f, n);
+        crate::linalg::scratch(&mut self.scratch_f, n);
         let s = State {
             t,
             x: &self.cloth.x,
@@ -823,7 +838,7 @@ impl Simulation {
             .filter(|&(i, _, _, _)| i < n && self.constraints.filter[i] != Filter::Fixed)
             .collect();
         contacts.sort_by_key(|c| c.0);
-        let solves_friction = self.integrator.solves_friction();
+        let solves_friction = self.caps.solves_friction;
         self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
         let mut friction = Vec::new();
         for group in contacts.chunk_by(|a, b| a.0 == b.0) {
@@ -866,12 +881,12 @@ impl Simulation {
             v: &self.cloth.v,
         };
         let n = self.cloth.len();
-        crate::integrate::scratch(&mut self.fext, n);
+        crate::linalg::scratch(&mut self.fext, n);
         self.effects.injecting_forces(&s, &mut self.fext);
         if moving_attachments {
             // Power a driven vertex puts into the cloth: minus the internal force on it times its
             // velocity (gravity on the driven vertex itself does no work on the cloth).
-            crate::integrate::scratch(&mut self.scratch_f, n);
+            crate::linalg::scratch(&mut self.scratch_f, n);
             self.effects.forces(&s, &mut self.scratch_f);
             for (i, _) in &self.cloth.kinematic {
                 let i = *i as usize;
@@ -896,7 +911,7 @@ impl Simulation {
         e0: Energies,
     ) -> Result<(Energies, f64, f64), (usize, Symptom)> {
         let n = self.cloth.len();
-        crate::integrate::scratch(&mut self.scratch_f, n);
+        crate::linalg::scratch(&mut self.scratch_f, n);
         let s = State {
             t: t1,
             x: &self.cloth.x,
@@ -1045,7 +1060,7 @@ impl Simulation {
             symptom,
             integrator: self.integrator.name(),
             suspect,
-            stability_limit: self.integrator.stability_limit(),
+            stability_limit: self.caps.stability_limit,
         }
     }
 }
