@@ -14,6 +14,7 @@ pub mod effects;
 pub mod garment;
 pub mod hard;
 pub mod integrate;
+pub mod linalg;
 pub mod mesh;
 pub mod pose;
 pub mod robot;

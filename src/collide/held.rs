@@ -7,7 +7,7 @@
 //! springs (0.2 J -> 110 J in 0.15 s at the wedge). Two independent normals leave one free
 //! direction, their edge line `e = n1 x n2 / |n1 x n2|` (`S = e e^T`); three leave none.
 
-use crate::integrate::Filter;
+use crate::linalg::Filter;
 use crate::{Mat3, Vec3};
 
 /// Normals closer than this (sine of the angle to the span of the normals kept so far) add no

@@ -259,7 +259,7 @@ impl EffectSet {
             (hit, split)
         };
         if !cached {
-            crate::integrate::scratch(f, s.x.len());
+            crate::linalg::scratch(f, s.x.len());
         }
         if split && self.effects.iter().any(|e| !e.position_only()) {
             // Velocity-dependent effects add to the full sum, in the order of a plain pass.
@@ -360,7 +360,7 @@ impl EffectSet {
         let cache = &mut *cache;
         let n = x.len();
         let (energies, first, second) = if n >= PAR_VERTICES {
-            crate::integrate::scratch(&mut cache.x, n);
+            crate::linalg::scratch(&mut cache.x, n);
             let (lo, hi) = (part_range(n, 0, 2), part_range(n, 1, 2));
             let (xa, xb) = cache.x.split_at_mut(hi.start);
             let (f, half) = (&mut cache.f, &mut cache.half);
@@ -459,18 +459,6 @@ pub(crate) fn flat_bits(v: &[f64]) -> &[u64] {
 pub(crate) fn flat_mut(v: &mut [Vec3]) -> &mut [f64] {
     // SAFETY: as in `flat`; the result borrows `v` mutably and exclusively.
     unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<f64>(), 3 * v.len()) }
-}
-
-/// Outer product `a b^T`.
-#[inline]
-pub(crate) fn outer_pub(a: Vec3, b: Vec3) -> crate::Mat3 {
-    outer(a, b)
-}
-
-/// Outer product `a b^T`.
-#[inline]
-pub(crate) fn outer(a: Vec3, b: Vec3) -> crate::Mat3 {
-    crate::Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 #[cfg(test)]

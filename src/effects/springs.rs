@@ -4,9 +4,10 @@
 //! `-k [n n^T + (1 - l/L)(I - n n^T)]`, with the transverse term clamped at zero under compression
 //! (Choi and Ko): keeping it would make the system matrix indefinite and break conjugate gradients.
 
-use super::{outer, Effect, State, StiffnessBound};
+use super::{Effect, State, StiffnessBound};
 use crate::cloth::topology::Spring;
 use crate::integrate::{BlockCsr, PairSlots, PatternBuilder};
+use crate::linalg::outer;
 use crate::{Mat3, Vec3};
 
 pub struct Springs {

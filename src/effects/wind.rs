@@ -5,8 +5,9 @@
 //! and sinusoidal gusts, so a flag flaps. `df/dv` is analytic; the dependence of `n` and `A` on
 //! positions is treated explicitly (lagged one step), as usual for aerodynamic loads.
 
-use super::{outer, Effect, State};
+use super::{Effect, State};
 use crate::integrate::{BlockCsr, PatternBuilder};
+use crate::linalg::outer;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 

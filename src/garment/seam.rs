@@ -1,7 +1,8 @@
 //! Seam vertex pairs in the flat particle system and the sewing springs that pull them together.
 
-use crate::effects::{outer_pub, Effect, State};
+use crate::effects::{Effect, State};
 use crate::integrate::{BlockCsr, PatternBuilder};
+use crate::linalg::outer;
 use crate::{Mat3, Vec3};
 
 /// The vertex pairs of one seam, in global indices of the pre-weld cloth.
@@ -90,7 +91,7 @@ impl Effect for SeamSprings {
             let rest = self.rest(k, s.t);
             let kaa = if len > 0.0 && rest > 0.0 {
                 let n = d / len;
-                let nn = outer_pub(n, n);
+                let nn = outer(n, n);
                 // Compressed springs drop their (indefinite) transverse term.
                 (nn + (Mat3::IDENTITY - nn) * (1.0 - rest / len).max(0.0)) * -self.k
             } else {

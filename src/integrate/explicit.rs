@@ -4,8 +4,10 @@
 //! forces and writes the end state, so the simulation keeps the start state for its rollback
 //! without a copy.
 
-use super::{Dynamics, Filter, Integrator, IntegratorStats};
+use super::dynamics::Dynamics;
+use super::integrator::{Capabilities, Integrator, StepReport};
 use crate::effects::{State, PAR_VERTICES};
+use crate::linalg::Filter;
 use crate::Vec3;
 use std::ops::Range;
 
@@ -43,11 +45,11 @@ impl<const SYMPLECTIC: bool> Integrator for Euler<SYMPLECTIC> {
         h: f64,
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
+        report: &mut StepReport,
+    ) {
         let start = self.start.take(x, v);
-        let stats = self.step_into(d, t, h, (&start.x, &start.v), x, v);
+        self.step_into(d, t, h, (&start.x, &start.v), x, v, report);
         self.start = start;
-        stats
     }
 
     fn step_into(
@@ -58,7 +60,8 @@ impl<const SYMPLECTIC: bool> Integrator for Euler<SYMPLECTIC> {
         (x0, v0): (&[Vec3], &[Vec3]),
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
+        report: &mut StepReport,
+    ) {
         let split =
             d.effects
                 .take_force_parts(&State { t, x: x0, v: v0 }, &mut self.f, &mut self.half);
@@ -81,15 +84,12 @@ impl<const SYMPLECTIC: bool> Integrator for Euler<SYMPLECTIC> {
             };
             update::<SYMPLECTIC>(ends, starts, h);
         });
-        IntegratorStats {
-            force_evaluations: 1,
-            ..Default::default()
-        }
+        report.explicit(1);
     }
 
-    fn stability_limit(&self) -> Option<f64> {
+    fn capabilities(&self) -> Capabilities {
         // Forward Euler undamped: unstable for every h > 0 (damping buys a small margin).
-        Some(if SYMPLECTIC { 2.0 } else { 0.0 })
+        Capabilities::explicit(if SYMPLECTIC { 2.0 } else { 0.0 })
     }
 }
 

@@ -17,10 +17,13 @@
 //! last two steps' velocity changes that is best in the energy norm.
 
 use super::contact::ContactSpring;
+use super::dynamics::Dynamics;
 use super::friction::{self, Drag};
+use super::integrator::{Capabilities, Integrator, StepReport};
 use super::precond::{Csr, Multigrid};
-use super::{scratch, BlockCsr, Dynamics, Filter, Integrator, IntegratorStats, PatternBuilder};
+use super::sparse::{BlockCsr, PatternBuilder};
 use crate::effects::{EffectSet, State};
+use crate::linalg::{scratch, Filter};
 use crate::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -328,9 +331,8 @@ pub struct Implicit {
     /// The current step's filter and the held vertices it released (see `settle_holds`).
     filter: Vec<Filter>,
     released: Vec<(usize, Vec3)>,
-    /// Per edge spring: its force at the end of the last step (N).
-    spring_forces: Vec<f64>,
-    /// Constraint impulses of the last step (see [`Integrator::constraint_impulses`]).
+    /// Constraint impulses of the current step (see [`StepReport::constraint_impulses`]): the
+    /// report's buffer, swapped in for the step and back out at its end.
     impulses: Vec<Vec3>,
     f0: Vec<Vec3>,
     b: Vec<Vec3>,
@@ -370,7 +372,6 @@ impl Implicit {
             edge_drags: Vec::new(),
             filter: Vec::new(),
             released: Vec::new(),
-            spring_forces: Vec::new(),
             impulses: Vec::new(),
             f0: Vec::new(),
             b: Vec::new(),
@@ -788,20 +789,12 @@ impl Integrator for Implicit {
         "implicit"
     }
 
-    fn solves_contacts(&self) -> bool {
-        true
-    }
-
-    fn contact_forces(&self) -> Option<&[f64]> {
-        Some(&self.spring_forces)
-    }
-
-    fn solves_friction(&self) -> bool {
-        true
-    }
-
-    fn constraint_impulses(&self) -> Option<&[Vec3]> {
-        (!self.impulses.is_empty()).then_some(self.impulses.as_slice())
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            stability_limit: None,
+            solves_friction: true,
+            solves_contacts: true,
+        }
     }
 
     fn prepare(&mut self, effects: &EffectSet, n: usize) {
@@ -829,8 +822,11 @@ impl Integrator for Implicit {
         h: f64,
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
-        rayon::scope(|_| self.step_in_pool(d, t, h, x, v))
+        report: &mut StepReport,
+    ) {
+        std::mem::swap(&mut self.impulses, &mut report.constraint_impulses);
+        rayon::scope(|_| self.step_in_pool(d, t, h, x, v, report));
+        std::mem::swap(&mut self.impulses, &mut report.constraint_impulses);
     }
 }
 
@@ -842,7 +838,8 @@ impl Implicit {
         h: f64,
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
+        report: &mut StepReport,
+    ) {
         let n = x.len();
         if self.a.as_ref().is_none_or(|a| a.rows() != n) {
             self.prepare(d.effects, n);
@@ -969,8 +966,9 @@ impl Implicit {
             v[i] += self.dv[i];
             x[i] += v[i] * h;
         }
-        self.spring_forces.clear();
-        self.spring_forces
+        report.contact_forces.clear();
+        report
+            .contact_forces
             .extend(d.constraints.contacts.iter().map(|c| {
                 if c.is_valid(n) {
                     c.force(x)
@@ -979,11 +977,9 @@ impl Implicit {
                 }
             }));
         self.filter = filter;
-        IntegratorStats {
-            force_evaluations: 2 + newton,
-            cg_iterations,
-            cg_residual: stats.residual,
-        }
+        report.force_evaluations = 2 + newton;
+        report.cg_iterations = cg_iterations;
+        report.cg_residual = stats.residual;
     }
 }
 
@@ -1383,8 +1379,9 @@ mod tests {
             let mut v = [Vec3::ZERO; 2];
             let mut solver = Implicit::new(ImplicitSettings::default());
             solver.prepare(&effects, 2);
-            solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v);
-            let impulse = solver.constraint_impulses().map_or(Vec3::ZERO, |r| r[1]);
+            let mut report = StepReport::default();
+            solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v, &mut report);
+            let impulse = report.impulses().map_or(Vec3::ZERO, |r| r[1]);
             if pulled {
                 assert!(v[1].z > 0.0, "pulled vertex stayed held: v {:?}", v[1]);
                 assert_eq!(
@@ -1435,7 +1432,8 @@ mod tests {
         solver.prepare(&effects, 2);
         for step in 0..20 {
             let before = energy(&x, &v);
-            let stats = solver.step(&d, step as f64 * h, h, &mut x, &mut v);
+            let mut stats = StepReport::default();
+            solver.step(&d, step as f64 * h, h, &mut x, &mut v, &mut stats);
             let after = energy(&x, &v);
             assert!(
                 after.is_finite() && after <= before,

@@ -16,7 +16,8 @@
 //! translation near-null space (one 3x3 identity per vertex), smoothed once with damped block
 //! Jacobi, Galerkin coarse matrices `P^T A P`, dense Cholesky on the coarsest level.
 
-use super::{BlockCsr, Filter};
+use super::sparse::BlockCsr;
+use crate::linalg::Filter;
 use crate::{Mat3, Vec3};
 use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;

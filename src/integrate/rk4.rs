@@ -1,8 +1,10 @@
 //! Classic fourth-order Runge-Kutta on the first-order system `(x, v)' = (v, a(x, v, t))`.
 
+use super::dynamics::Dynamics;
 use super::explicit::{InverseMass, StartState};
-use super::{scratch, Dynamics, Integrator, IntegratorStats};
+use super::integrator::{Capabilities, Integrator, StepReport};
 use crate::effects::State;
+use crate::linalg::scratch;
 use crate::Vec3;
 
 #[derive(Default)]
@@ -29,11 +31,11 @@ impl Integrator for Rk4 {
         h: f64,
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
+        report: &mut StepReport,
+    ) {
         let start = self.start.take(x, v);
-        let stats = self.step_into(d, t, h, (&start.x, &start.v), x, v);
+        self.step_into(d, t, h, (&start.x, &start.v), x, v, report);
         self.start = start;
-        stats
     }
 
     fn step_into(
@@ -44,7 +46,8 @@ impl Integrator for Rk4 {
         (x0, v0): (&[Vec3], &[Vec3]),
         x: &mut [Vec3],
         v: &mut [Vec3],
-    ) -> IntegratorStats {
+        report: &mut StepReport,
+    ) {
         let n = x0.len();
         scratch(&mut self.xs, n);
         for k in 0..3 {
@@ -94,14 +97,11 @@ impl Integrator for Rk4 {
             x[i] = x0[i] + (v0[i] + kx1[i] * 2.0 + kx2[i] * 2.0 + kx3[i]) * (h / 6.0);
             v[i] = v0[i] + (kv0[i] + kv1[i] * 2.0 + kv2[i] * 2.0 + kv3[i]) * (h / 6.0);
         }
-        IntegratorStats {
-            force_evaluations: 4,
-            ..Default::default()
-        }
+        report.explicit(4);
     }
 
-    fn stability_limit(&self) -> Option<f64> {
+    fn capabilities(&self) -> Capabilities {
         // |R(i h omega)| <= 1 on the imaginary axis up to h omega = 2 sqrt(2).
-        Some(2.0 * std::f64::consts::SQRT_2)
+        Capabilities::explicit(2.0 * std::f64::consts::SQRT_2)
     }
 }

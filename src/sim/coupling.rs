@@ -18,7 +18,8 @@
 use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
 use crate::effects::{EffectSet, State};
-use crate::integrate::{Constraints, ContactSpring, Filter, Friction};
+use crate::integrate::{Constraints, ContactSpring, Friction};
+use crate::linalg::Filter;
 use crate::Vec3;
 
 /// `k h^2 / m` of an edge spring at the contact point's mass `m`: the spring stops the point
@@ -141,7 +142,7 @@ impl Coupling {
             return;
         }
         if impulses.is_none() {
-            crate::integrate::scratch(scratch, n);
+            crate::linalg::scratch(scratch, n);
             let s = State {
                 t: t + h,
                 x: &cloth.x,
@@ -261,7 +262,7 @@ impl Coupling {
             return;
         }
         let n = s.cloth.len();
-        crate::integrate::scratch(scratch, n);
+        crate::linalg::scratch(scratch, n);
         let st = State {
             t: s.t,
             x: &s.cloth.x,

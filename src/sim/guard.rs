@@ -297,7 +297,7 @@ impl Guard {
     ) -> Result<Accepted, (usize, Symptom)> {
         let c = s.cloth;
         let n = c.len();
-        crate::integrate::scratch(scratch, n);
+        crate::linalg::scratch(scratch, n);
         let st = State {
             t: t1,
             x: &c.x,
@@ -341,12 +341,12 @@ pub(super) fn external_forces(
         v: &cloth.v,
     };
     let n = cloth.len();
-    crate::integrate::scratch(fext, n);
+    crate::linalg::scratch(fext, n);
     effects.injecting_forces(&s, fext);
     if moving_attachments {
         // Power a driven vertex puts into the cloth: minus the internal force on it times its
         // velocity (gravity on the driven vertex itself does no work on the cloth).
-        crate::integrate::scratch(scratch, n);
+        crate::linalg::scratch(scratch, n);
         effects.forces(&s, scratch);
         for (i, _) in &cloth.kinematic {
             let i = *i as usize;

@@ -2,7 +2,7 @@
 //! the collision stage's reports of each substep.
 
 use crate::collide::CollisionReport;
-use crate::integrate::IntegratorStats;
+use crate::integrate::StepReport;
 
 /// What one frame step did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -33,7 +33,7 @@ pub struct StepMetrics {
 
 impl StepMetrics {
     /// Adds one solve's counts.
-    pub(super) fn add_solve(&mut self, stats: &IntegratorStats) {
+    pub(super) fn add_solve(&mut self, stats: &StepReport) {
         self.force_evaluations += stats.force_evaluations;
         self.cg_iterations += stats.cg_iterations;
         self.cg_residual_max = self.cg_residual_max.max(stats.cg_residual);

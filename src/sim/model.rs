@@ -4,6 +4,7 @@
 
 use super::guard::GuardSettings;
 use crate::effects::EffectSet;
+use crate::integrate::{Capabilities, StepReport};
 use crate::Vec3;
 
 /// Time stepping settings of a simulation.
@@ -22,17 +23,21 @@ impl StepSettings {
     }
 }
 
-/// The forces a scene named, and what follows from them and the masses alone.
+/// The forces a scene named, what the integrator is, and what follows from them and the
+/// masses alone.
 pub(super) struct Model {
     pub effects: EffectSet,
+    /// What the integrator is (asked once, at construction).
+    pub caps: Capabilities,
     /// Upper bound of the cloth's highest angular frequency (rad/s), computed on first use.
     omega_bound: Option<f64>,
 }
 
 impl Model {
-    pub fn new(effects: EffectSet) -> Self {
+    pub fn new(effects: EffectSet, caps: Capabilities) -> Self {
         Self {
             effects,
+            caps,
             omega_bound: None,
         }
     }
@@ -60,4 +65,6 @@ pub(super) struct Work {
     pub fext: Vec<Vec3>,
     /// Inverse masses for the collision stage (0 for kinematic vertices).
     pub inv_mass: Vec<f64>,
+    /// The integrator's report of the last solve (its buffers reused across steps).
+    pub report: StepReport,
 }

@@ -61,7 +61,7 @@ impl Simulation {
             coupling,
             last: StepMetrics::default(),
             settings,
-            model: Model::new(effects),
+            model: Model::new(effects, integrator.capabilities()),
             integrator,
             work: Work::default(),
         }

@@ -27,7 +27,7 @@ use super::error::{DivergenceError, Symptom};
 use super::guard::{self, DivergencePolicy, Sample};
 use super::metrics::StepMetrics;
 use super::simulation::Simulation;
-use crate::integrate::{Dynamics, IntegratorStats};
+use crate::integrate::Dynamics;
 use std::time::Instant;
 
 impl Simulation {
@@ -126,7 +126,7 @@ impl Simulation {
     /// Whether the substep is over the integrator's stability limit (see
     /// [`guard::over_stability_limit`]).
     fn over_stability_limit(&mut self, h: f64, depth: u32) -> bool {
-        let limit = self.integrator.stability_limit();
+        let limit = self.model.caps.stability_limit;
         let (model, mass) = (&mut self.model, &self.cloth.mass);
         guard::over_stability_limit(&self.settings.guard, limit, h, depth, || {
             model.omega_bound(mass)
@@ -156,8 +156,8 @@ impl Simulation {
             h_scene: self.settings.substep(),
         };
         let solves = Solves {
-            friction: self.integrator.solves_friction(),
-            contacts: self.integrator.solves_contacts(),
+            friction: self.model.caps.solves_friction,
+            contacts: self.model.caps.solves_contacts,
         };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
@@ -178,20 +178,22 @@ impl Simulation {
         let n = self.cloth.len();
         std::mem::swap(&mut self.work.x_save, &mut self.cloth.x);
         std::mem::swap(&mut self.work.v_save, &mut self.cloth.v);
-        crate::integrate::scratch(&mut self.cloth.x, n);
-        crate::integrate::scratch(&mut self.cloth.v, n);
-        let stats: IntegratorStats = {
-            let d = Dynamics {
-                effects: &self.model.effects,
-                mass: &self.cloth.mass,
-                constraints: &self.coupling.constraints,
-            };
-            let start = (self.work.x_save.as_slice(), self.work.v_save.as_slice());
-            self.integrator
-                .step_into(&d, t, h, start, &mut self.cloth.x, &mut self.cloth.v)
+        crate::linalg::scratch(&mut self.cloth.x, n);
+        crate::linalg::scratch(&mut self.cloth.v, n);
+        let d = Dynamics {
+            effects: &self.model.effects,
+            mass: &self.cloth.mass,
+            constraints: &self.coupling.constraints,
         };
-        self.coupling.solved(self.integrator.contact_forces());
-        m.add_solve(&stats);
+        let w = &mut self.work;
+        let start = (w.x_save.as_slice(), w.v_save.as_slice());
+        let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
+        self.integrator
+            .step_into(&d, t, h, start, x, v, &mut w.report);
+        let forces = w.report.contact_forces.as_slice();
+        self.coupling
+            .solved(self.model.caps.solves_contacts.then_some(forces));
+        m.add_solve(&w.report);
     }
 
     /// 4. Kinematic vertices end exactly on target (no drift from round-off).
@@ -222,7 +224,7 @@ impl Simulation {
             .guard
             .check(&g, &s, h, e0, external.then_some(w.fext.as_slice()));
         if external
-            && self.integrator.stability_limit().is_none()
+            && self.model.caps.stability_limit.is_none()
             && matches!(verdict, Err((_, Symptom::EnergyGain { .. })))
         {
             let scratch = &mut w.scratch_f;
@@ -247,7 +249,7 @@ impl Simulation {
             &self.cloth,
             &self.model.effects,
             self.integrator.name(),
-            self.integrator.stability_limit(),
+            self.model.caps.stability_limit,
             (t, h),
             vertex,
             symptom,
@@ -271,8 +273,8 @@ impl Simulation {
     /// 7. Coupling out: the solver's impulses on held vertices become the stage's feedback
     /// (and in-solve friction's next limits); see [`super::coupling`].
     fn coupling_out(&mut self, t: f64, h: f64) {
-        let solves_friction = self.integrator.solves_friction();
-        let impulses = self.integrator.constraint_impulses();
+        let solves_friction = self.model.caps.solves_friction;
+        let impulses = self.work.report.impulses();
         let (v0, scratch) = (&self.work.v_save, &mut self.work.scratch_f);
         let (cloth, effects) = (&self.cloth, &self.model.effects);
         self.coupling.feedback_out(

@@ -1,0 +1,71 @@
+//! What a step integrates: the effects, the masses and the step's per-vertex constraints.
+//!
+//! Constraints reach every integrator the same way: a per-vertex [`Filter`] (free, one direction
+//! constrained, or fixed) and a target velocity for the constrained directions. Explicit methods
+//! filter accelerations; the implicit method filters its conjugate-gradient iterates, which is the
+//! survey's "mass modification" `(I - p p^T)/m`. Friction and contact springs are there for the
+//! methods that solve them (see [`super::Capabilities`]).
+
+use super::contact::ContactSpring;
+use super::friction::Friction;
+use crate::effects::{EffectSet, State};
+use crate::linalg::Filter;
+use crate::Vec3;
+
+/// Per-vertex constraints of one step.
+#[derive(Debug, Clone, Default)]
+pub struct Constraints {
+    pub filter: Vec<Filter>,
+    /// Velocity the constrained components must have at the end of the step.
+    pub target_velocity: Vec<Vec3>,
+    /// Coulomb friction of held vertices, for integrators that solve it (see
+    /// [`super::Capabilities::solves_friction`]); the others leave friction to the collision
+    /// stage.
+    pub friction: Vec<Friction>,
+    /// Static obstacle edges and corners against the cloth, for integrators that solve them
+    /// (see [`super::Capabilities::solves_contacts`]); the others leave them to the collision
+    /// stage.
+    pub contacts: Vec<ContactSpring>,
+}
+
+impl Constraints {
+    pub fn free(n: usize) -> Self {
+        Self {
+            filter: vec![Filter::Free; n],
+            target_velocity: vec![Vec3::ZERO; n],
+            friction: Vec::new(),
+            contacts: Vec::new(),
+        }
+    }
+}
+
+/// Everything an integrator needs to evaluate the dynamics.
+pub struct Dynamics<'a> {
+    pub effects: &'a EffectSet,
+    pub mass: &'a [f64],
+    pub constraints: &'a Constraints,
+}
+
+impl Dynamics<'_> {
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+
+    /// Filtered accelerations at `(t, x, v)` into `a`, using `f` as scratch for forces.
+    pub fn accelerations(&self, t: f64, x: &[Vec3], v: &[Vec3], f: &mut [Vec3], a: &mut [Vec3]) {
+        self.effects.forces(&State { t, x, v }, f);
+        for i in 0..a.len() {
+            a[i] = self.acceleration(i, f[i]);
+        }
+    }
+
+    /// Filtered acceleration of vertex `i` under force `f`.
+    #[inline]
+    pub fn acceleration(&self, i: usize, f: Vec3) -> Vec3 {
+        self.constraints.filter[i].apply(f / self.mass[i])
+    }
+}

@@ -1,0 +1,44 @@
+//! The integrator a scene file names, and the method it builds.
+
+use super::explicit::{ExplicitEuler, SymplecticEuler};
+use super::implicit::{Implicit, ImplicitSettings};
+use super::integrator::Integrator;
+use super::rk4::Rk4;
+use serde::{Deserialize, Serialize};
+
+/// Integrator choice in a scene file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    ExplicitEuler,
+    SymplecticEuler,
+    Rk4,
+    Implicit,
+}
+
+impl IntegratorKind {
+    pub const ALL: [IntegratorKind; 4] = [
+        IntegratorKind::ExplicitEuler,
+        IntegratorKind::SymplecticEuler,
+        IntegratorKind::Rk4,
+        IntegratorKind::Implicit,
+    ];
+
+    pub fn build(self, implicit: ImplicitSettings) -> Box<dyn Integrator> {
+        match self {
+            IntegratorKind::ExplicitEuler => Box::new(ExplicitEuler::default()),
+            IntegratorKind::SymplecticEuler => Box::new(SymplecticEuler::default()),
+            IntegratorKind::Rk4 => Box::new(Rk4::default()),
+            IntegratorKind::Implicit => Box::new(Implicit::new(implicit)),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::ExplicitEuler => "explicit_euler",
+            IntegratorKind::SymplecticEuler => "symplectic_euler",
+            IntegratorKind::Rk4 => "rk4",
+            IntegratorKind::Implicit => "implicit",
+        }
+    }
+}
