@@ -295,7 +295,7 @@ impl ObstacleSpec {
     pub fn build<F, E>(&self, load_mesh: F) -> Result<Obstacle, BuildError>
     where
         F: FnOnce(&str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), E>,
-        E: std::fmt::Display,
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
     {
         let pose = self.pose.to_pose();
         let n = &self.name;
@@ -317,7 +317,7 @@ impl ObstacleSpec {
                 let (v, i) = load_mesh(path).map_err(|e| BuildError::Mesh {
                     name: n.clone(),
                     path: path.clone(),
-                    reason: e.to_string(),
+                    source: e.into(),
                 })?;
                 let s = Vec3::from(*scale);
                 let v: Vec<Vec3> = v.iter().map(|p| *p * s).collect();
@@ -332,11 +332,12 @@ impl ObstacleSpec {
 
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    #[error("obstacle '{name}': cannot load mesh '{path}': {reason}")]
+    #[error("obstacle '{name}': cannot load mesh '{path}': {source}")]
     Mesh {
         name: String,
         path: String,
-        reason: String,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
     #[error(transparent)]
     Obstacle(#[from] ObstacleError),

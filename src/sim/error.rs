@@ -1,23 +1,61 @@
-//! The error of a simulation that diverged: what the guard measured, where, and (when the
-//! stability bound says so) which effect is the cause.
+//! The error of a simulation that diverged: what the guard measured, where, and (only when the
+//! integrator's stability bound says so) which effect is the cause.
 
-use crate::effects::StiffnessBound;
 use std::fmt;
 
-/// Why a substep was rejected.
+/// Why a substep was rejected: what the guard measured.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Symptom {
     NonFinite,
+    /// Speed of the fastest vertex (m/s), above the guard's `max_speed`.
     Speed(f64),
-    /// Energy gained beyond the external work, in joules.
+    /// Energy gained in one substep beyond what external work and the allowances explain (J).
     EnergyGain {
         gained: f64,
         allowed: f64,
     },
 }
 
-/// A simulation that diverged and could not be rescued by the policy.
+impl fmt::Display for Symptom {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Symptom::NonFinite => write!(f, "has a non-finite position or velocity"),
+            Symptom::Speed(s) => write!(f, "moves at {s:.3e} m/s"),
+            Symptom::EnergyGain { gained, allowed } => write!(
+                f,
+                "is where energy runs away ({gained:.3e} J gained in one step, {allowed:.3e} J \
+                 allowed)"
+            ),
+        }
+    }
+}
+
+/// What the guard can say about the cause of a divergence.
 #[derive(Debug, Clone, PartialEq)]
+pub enum Cause {
+    /// The step is over the integrator's stability bound `h omega <= limit` (`omega` the
+    /// bound on the cloth's highest angular frequency); `parameter` is the scene parameter of
+    /// the effect contributing the largest `omega^2`.
+    Unstable {
+        parameter: String,
+        /// `h omega` of the failed step.
+        h_omega: f64,
+        limit: f64,
+    },
+    /// The integrator is stable for no step size of an undamped oscillation (forward Euler).
+    NoStableStep,
+    /// Within the stability bound, or the integrator has none (implicit): the guard measured
+    /// the symptom only, and names no culprit it has not measured.
+    Unknown,
+}
+
+/// A simulation that diverged and could not be rescued by the policy.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "cloth '{cloth}' diverged at t = {time:.4} s (step {step:.3e} s, {integrator}): vertex \
+     {vertex} {symptom}{}",
+    CauseText(.cause, .integrator)
+)]
 pub struct DivergenceError {
     pub time: f64,
     pub step: f64,
@@ -26,50 +64,34 @@ pub struct DivergenceError {
     pub vertex: usize,
     pub symptom: Symptom,
     pub integrator: &'static str,
-    /// The stiffest elastic effect, with `h * omega` for the failed step.
-    pub suspect: Option<(StiffnessBound, f64)>,
-    pub stability_limit: Option<f64>,
+    pub cause: Cause,
 }
 
-impl fmt::Display for DivergenceError {
+/// The cause's part of the message, with advice where the cause is known.
+struct CauseText<'a>(&'a Cause, &'a &'static str);
+
+impl fmt::Display for CauseText<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "cloth '{}' diverged at t = {:.4} s (step {:.3e} s, {}): vertex {} ",
-            self.cloth, self.time, self.step, self.integrator, self.vertex
-        )?;
-        match &self.symptom {
-            Symptom::NonFinite => write!(f, "has a non-finite position or velocity")?,
-            Symptom::Speed(s) => write!(f, "moves at {s:.3e} m/s")?,
-            Symptom::EnergyGain { gained, allowed } => write!(
-                f,
-                "is where energy runs away ({gained:.3e} J gained in one step, {allowed:.3e} J explained)"
-            )?,
-        }
-        if let Some((b, h_omega)) = &self.suspect {
-            write!(
-                f,
-                "; likely cause: {} (h*omega = {:.3}",
-                b.parameter, h_omega
-            )?;
-            if let Some(limit) = self.stability_limit {
+        let integrator = *self.1;
+        match self.0 {
+            Cause::Unstable {
+                parameter,
+                h_omega,
+                limit,
+            } => {
                 write!(
                     f,
-                    ", stability limit of {} is {:.3}",
-                    self.integrator, limit
-                )?;
+                    "; cause: the step is over the stability limit of {integrator} (h*omega = \
+                     {h_omega:.3} > {limit:.3}, stiffest: {parameter}): lower dt, raise \
+                     solver.substeps or soften {parameter}, or use the implicit integrator"
+                )
             }
-            write!(
+            Cause::NoStableStep => write!(
                 f,
-                "): lower dt, raise solver.substeps or soften {}",
-                b.parameter
-            )?;
-            if self.integrator != "implicit" {
-                write!(f, ", or use the implicit integrator")?;
-            }
+                "; cause: {integrator} is stable for no step of an undamped spring: use \
+                 symplectic_euler, rk4 or the implicit integrator"
+            ),
+            Cause::Unknown => Ok(()),
         }
-        Ok(())
     }
 }
-
-impl std::error::Error for DivergenceError {}

@@ -12,7 +12,7 @@
 //! vertices) and the allowances spent.
 
 use super::energy::Energies;
-use super::error::{DivergenceError, Symptom};
+use super::error::{Cause, DivergenceError, Symptom};
 use super::scan::scan_vertices;
 use crate::cloth::Cloth;
 use crate::effects::{EffectSet, State};
@@ -377,11 +377,17 @@ pub(super) fn over_stability_limit(
 }
 
 /// The error for a substep of `h` at `t` that failed at `vertex` (flat index) with `symptom`.
+/// An effect is blamed only when the step is over the integrator's stability bound
+/// `h omega > limit` (`omega_bound` the bound on the cloth's highest angular frequency): the one contributing the largest `omega^2`.
+/// Otherwise (within the bound, or an integrator without one) the error reports what the guard
+/// measured and suggests no step size.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn divergence_error(
     cloth: &Cloth,
     effects: &EffectSet,
     integrator: &'static str,
     stability_limit: Option<f64>,
+    omega_bound: f64,
     (t, h): (f64, f64),
     vertex: usize,
     symptom: Symptom,
@@ -390,10 +396,25 @@ pub(super) fn divergence_error(
         Some(p) => (p.name.clone(), vertex - p.first_vertex),
         None => (String::from("?"), vertex),
     };
-    let suspect = effects.stiffness(&cloth.mass).into_iter().next().map(|b| {
-        let ho = h * b.omega_sq.sqrt();
-        (b, ho)
-    });
+    let cause = match stability_limit {
+        None => Cause::Unknown,
+        Some(limit) if limit <= 0.0 => Cause::NoStableStep,
+        Some(limit) => {
+            let h_omega = h * omega_bound;
+            let stiffest = effects
+                .stiffness(&cloth.mass)
+                .into_iter()
+                .max_by(|a, b| a.omega_sq.total_cmp(&b.omega_sq));
+            match stiffest {
+                Some(b) if h_omega > limit => Cause::Unstable {
+                    parameter: b.parameter,
+                    h_omega,
+                    limit,
+                },
+                _ => Cause::Unknown,
+            }
+        }
+    };
     DivergenceError {
         time: t,
         step: h,
@@ -401,7 +422,6 @@ pub(super) fn divergence_error(
         vertex: local,
         symptom,
         integrator,
-        suspect,
-        stability_limit,
+        cause,
     }
 }

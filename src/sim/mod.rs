@@ -15,7 +15,7 @@ mod scan;
 mod simulation;
 mod step;
 
-pub use error::{DivergenceError, Symptom};
+pub use error::{Cause, DivergenceError, Symptom};
 pub use frames::{FrameScript, Frames};
 pub use guard::{DivergencePolicy, GuardSettings};
 pub use metrics::StepMetrics;

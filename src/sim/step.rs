@@ -244,12 +244,21 @@ impl Simulation {
         self.guard.reject(e0);
     }
 
-    fn divergence_error(&self, t: f64, h: f64, vertex: usize, symptom: Symptom) -> DivergenceError {
+    /// The error for the failed substep, with the cause only where the stability bound says so.
+    fn divergence_error(
+        &mut self,
+        t: f64,
+        h: f64,
+        vertex: usize,
+        symptom: Symptom,
+    ) -> DivergenceError {
+        let omega = self.model.omega_bound(&self.cloth.mass);
         guard::divergence_error(
             &self.cloth,
             &self.model.effects,
             self.integrator.name(),
             self.model.caps.stability_limit,
+            omega,
             (t, h),
             vertex,
             symptom,

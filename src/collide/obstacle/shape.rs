@@ -3,12 +3,26 @@
 
 use crate::collide::motion::Motion;
 use crate::{Pose, Vec3};
-use parry3d::shape::{SharedShape, TriMesh, TriMeshFlags};
+use parry3d::shape::{SharedShape, TriMesh, TriMeshBuilderError, TriMeshFlags};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ObstacleError {
-    #[error("obstacle '{name}': invalid mesh: {reason}")]
-    BadMesh { name: String, reason: String },
+    #[error("obstacle '{name}': invalid mesh: vertex {vertex} is not finite")]
+    NonFiniteVertex { name: String, vertex: usize },
+    #[error(
+        "obstacle '{name}': invalid mesh: triangle {triangle} references a vertex >= {vertices}"
+    )]
+    IndexOutOfRange {
+        name: String,
+        triangle: usize,
+        vertices: usize,
+    },
+    #[error("obstacle '{name}': invalid mesh: {source}")]
+    Mesh {
+        name: String,
+        #[source]
+        source: TriMeshBuilderError,
+    },
     #[error("obstacle '{name}': {what} must be finite and > 0 (got {value})")]
     BadDimension {
         name: String,
@@ -191,27 +205,31 @@ impl Obstacle {
         indices: &[[u32; 3]],
         pose: Pose,
     ) -> Result<Self, ObstacleError> {
-        let bad = |reason: String| ObstacleError::BadMesh {
-            name: name.to_string(),
-            reason,
-        };
-        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
-            return Err(bad(format!("vertex {i} is not finite")));
+        if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(ObstacleError::NonFiniteVertex {
+                name: name.to_string(),
+                vertex,
+            });
         }
-        if let Some(k) = indices
+        if let Some(triangle) = indices
             .iter()
             .position(|t| t.iter().any(|&i| i as usize >= vertices.len()))
         {
-            return Err(bad(format!(
-                "triangle {k} references a vertex >= {}",
-                vertices.len()
-            )));
+            return Err(ObstacleError::IndexOutOfRange {
+                name: name.to_string(),
+                triangle,
+                vertices: vertices.len(),
+            });
         }
         let verts = vertices.iter().map(|v| v.as_vec3()).collect();
         let flags =
             TriMeshFlags::DELETE_DEGENERATE_TRIANGLES | TriMeshFlags::MERGE_DUPLICATE_VERTICES;
-        let mesh =
-            TriMesh::with_flags(verts, indices.to_vec(), flags).map_err(|e| bad(e.to_string()))?;
+        let mesh = TriMesh::with_flags(verts, indices.to_vec(), flags).map_err(|source| {
+            ObstacleError::Mesh {
+                name: name.to_string(),
+                source,
+            }
+        })?;
         Ok(Self::from_shape(
             name,
             SharedShape::new(mesh),
