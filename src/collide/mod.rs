@@ -3,11 +3,12 @@
 //! friction, and cloth-cloth collision with an impact-zone fail-safe.
 //!
 //! Files: `settings` (modes), `contact` / `report` / `error` (what the stage hands back),
-//! `feedback` (what the solver hands in), `stage` (what the stage owns), `resolve` (the order of one `resolve`), `vertex_pass`
-//! (vertices vs obstacles, with `respond` for one vertex), `pinch` and `wedge` (a vertex between
-//! several obstacles), `features` (obstacle edges and rods vs cloth faces and edges),
-//! `self_contact` (cloth vs cloth), `held` (the filter of a vertex held by several surfaces),
-//! `obstacle`, `motion`, `spec` (scene description), `broad` and `narrow` (geometry).
+//! `feedback` (what the solver hands in), `stage` (what the stage owns), `resolve` (the order
+//! of one `resolve`), `vertex_pass` (vertices vs obstacles, with `respond` for one vertex),
+//! `pinch` and `wedge` (a vertex between several obstacles), `features` (obstacle edges and
+//! rods vs cloth faces and edges), `self_contact` (cloth vs cloth), `held` (the filter of a
+//! vertex held by several surfaces), `obstacle`, `motion`, `spec` (scene description),
+//! `broad` and `narrow` (geometry).
 
 mod broad;
 mod contact;

@@ -378,7 +378,8 @@ pub(super) fn over_stability_limit(
 
 /// The error for a substep of `h` at `t` that failed at `vertex` (flat index) with `symptom`.
 /// An effect is blamed only when the step is over the integrator's stability bound
-/// `h omega > limit` (`omega_bound` the bound on the cloth's highest angular frequency): the one contributing the largest `omega^2`.
+/// `h omega > limit` (`omega_bound` the bound on the cloth's highest angular frequency): the
+/// one contributing the largest `omega^2`.
 /// Otherwise (within the bound, or an integrator without one) the error reports what the guard
 /// measured and suggests no step size.
 #[allow(clippy::too_many_arguments)]

@@ -133,7 +133,7 @@ impl Simulation {
         })
     }
 
-    /// 1. Kinematic vertices start on their target at `s0` and move at the constant velocity
+    /// Stage 1: Kinematic vertices start on their target at `s0` and move at the constant velocity
     /// that reaches the one at `s1`; the solver's filter fixes them at that velocity.
     fn kinematic_targets(&mut self, h: f64, s0: f64, s1: f64) {
         self.coupling.begin(self.cloth.len());
@@ -146,7 +146,7 @@ impl Simulation {
         }
     }
 
-    /// 2. Coupling in: the last collision pass's contacts become this substep's constraints
+    /// Stage 2: Coupling in: the last collision pass's contacts become this substep's constraints
     /// (filter, friction, edge springs); see [`super::coupling`].
     fn coupling_in(&mut self, t: f64) {
         let start = StartState {
@@ -171,7 +171,7 @@ impl Simulation {
         guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
     }
 
-    /// 3. Integrate: the start state moves to the save buffers (a swap, not a copy) and the
+    /// Stage 3: Integrate: the start state moves to the save buffers (a swap, not a copy) and the
     /// integrator writes the end state into the cloth's buffers; its contact forces go to the
     /// coupling, its counts to the metrics.
     fn integrate(&mut self, t: f64, h: f64, m: &mut StepMetrics) {
@@ -196,14 +196,14 @@ impl Simulation {
         m.add_solve(&w.report);
     }
 
-    /// 4. Kinematic vertices end exactly on target (no drift from round-off).
+    /// Stage 4: Kinematic vertices end exactly on target (no drift from round-off).
     fn snap_kinematic(&mut self, s1: f64) {
         for (i, k) in &self.cloth.kinematic {
             self.cloth.x[*i as usize] = self.frames.target(k, s1);
         }
     }
 
-    /// 5. The guard's verdict on the solved substep started at energies `e0`; an accepted one
+    /// Stage 5: The guard's verdict on the solved substep started at energies `e0`; an accepted one
     /// is booked. `external`: whether `work.fext` holds external forces.
     fn check(
         &mut self,
@@ -265,7 +265,7 @@ impl Simulation {
         )
     }
 
-    /// 6. Obstacles move over `[t, t + h]`: scripted ones by their motion, driven ones to
+    /// Stage 6: Obstacles move over `[t, t + h]`: scripted ones by their motion, driven ones to
     /// fraction `s1` of their frame targets.
     fn move_obstacles(&mut self, t: f64, h: f64, s1: f64) {
         let Some(stage) = self.collision.as_mut() else {
@@ -279,7 +279,7 @@ impl Simulation {
         }
     }
 
-    /// 7. Coupling out: the solver's impulses on held vertices become the stage's feedback
+    /// Stage 7: Coupling out: the solver's impulses on held vertices become the stage's feedback
     /// (and in-solve friction's next limits); see [`super::coupling`].
     fn coupling_out(&mut self, t: f64, h: f64) {
         let solves_friction = self.model.caps.solves_friction;
@@ -297,7 +297,7 @@ impl Simulation {
         );
     }
 
-    /// 8. Collisions fix the end state (kinematic vertices have infinite mass), with the
+    /// Stage 8: Collisions fix the end state (kinematic vertices have infinite mass), with the
     /// solver's feedback; the report goes to the metrics and the energy change to the guard.
     fn collide(&mut self, h: f64, m: &mut StepMetrics) {
         let Some(stage) = self.collision.as_mut() else {

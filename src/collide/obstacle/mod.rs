@@ -10,8 +10,8 @@
 //! open meshes work as well as closed ones.
 //!
 //! Files: `shape` (the obstacle, its constructors and swept bounds), `query` (f64 point
-//! queries: closest surface point, inside test, first crossing), `surface` (the queries' answers), `cuboid` (the box's exact
-//! closest point and slab cast).
+//! queries: closest surface point, inside test, first crossing), `surface` (the queries'
+//! answers), `cuboid` (the box's exact closest point and slab cast).
 
 mod cuboid;
 mod query;
