@@ -1,6 +1,10 @@
 //! [`EffectSet`]: the effects a scene names, in scene order, summed into one force, Jacobian
 //! and energy evaluation; position-only forces are reused from the guard's energy pass when the
 //! positions are bitwise those of that pass (see [`super::cache`]).
+//!
+//! Gravity has a typed slot: the guard tells its potential from the elastic ones, and its
+//! vector bounds the guard's error. Its turn in the summation order is where the scene names
+//! it, so the sums are those of a plain list.
 
 use super::cache::PositionForces;
 use super::effect::{Effect, State, StiffnessBound};
@@ -8,15 +12,32 @@ use super::gravity::Gravity;
 use crate::linalg::{BlockCsr, PatternBuilder};
 use crate::par::{part_range, PAR_VERTICES};
 use crate::Vec3;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// The built effects of a simulation, in scene order, with evaluation counts.
 #[derive(Default)]
 pub struct EffectSet {
-    effects: Vec<Box<dyn Effect>>,
-    evaluations: Vec<std::sync::atomic::AtomicU64>,
-    gravity: Vec3,
+    /// The set's gravity (one at most), evaluated at the turn of [`Term::Gravity`].
+    gravity: Option<Gravity>,
+    /// The terms in scene order: the order forces, Jacobians and energies are summed in.
+    terms: Vec<Term>,
+    /// Force evaluations per term.
+    evaluations: Vec<AtomicU64>,
     cache: Mutex<PositionForces>,
+}
+
+/// One term of the set: gravity's turn (the typed [`EffectSet::gravity`] slot) or an effect.
+enum Term {
+    Gravity,
+    Effect(Box<dyn Effect>),
+}
+
+/// An effect of the set with its evaluation counter.
+struct Entry<'a> {
+    effect: &'a dyn Effect,
+    evaluations: &'a AtomicU64,
+    gravity: bool,
 }
 
 impl EffectSet {
@@ -24,45 +45,74 @@ impl EffectSet {
         Self::default()
     }
 
-    /// Adds gravity (kept as a vector too, for the divergence guard's error bound).
+    /// Gives the set its gravity, summed at this point of the scene order. A set has one
+    /// gravity: pushed again, the new one replaces the old in the old one's turn.
     pub fn push_gravity(&mut self, g: Gravity) {
-        self.gravity += g.g;
-        self.push(Box::new(g));
+        if self.gravity.replace(g).is_none() {
+            self.push_term(Term::Gravity);
+        } else {
+            self.invalidate();
+        }
     }
 
     pub fn push(&mut self, e: Box<dyn Effect>) {
-        self.effects.push(e);
+        self.push_term(Term::Effect(e));
+    }
+
+    fn push_term(&mut self, t: Term) {
+        self.terms.push(t);
         self.evaluations.push(Default::default());
-        // The cached forces lack the new effect.
+        self.invalidate();
+    }
+
+    /// The cached forces lack a new or replaced effect.
+    fn invalidate(&mut self) {
         self.cache
             .get_mut()
             .unwrap_or_else(|p| p.into_inner())
             .valid = false;
     }
 
+    /// The effects in scene order, gravity at its turn, with their counters.
+    fn entries(&self) -> impl Iterator<Item = Entry<'_>> {
+        self.terms
+            .iter()
+            .zip(&self.evaluations)
+            .filter_map(|(t, evaluations)| {
+                let (effect, gravity): (&dyn Effect, bool) = match t {
+                    Term::Gravity => (self.gravity.as_ref()?, true),
+                    Term::Effect(e) => (e.as_ref(), false),
+                };
+                Some(Entry {
+                    effect,
+                    evaluations,
+                    gravity,
+                })
+            })
+    }
+
+    /// The effects in scene order (gravity at its turn).
     pub fn iter(&self) -> impl Iterator<Item = &dyn Effect> {
-        self.effects.iter().map(|e| e.as_ref())
+        self.entries().map(|e| e.effect)
     }
 
     pub fn names(&self) -> Vec<&'static str> {
-        self.effects.iter().map(|e| e.name()).collect()
+        self.iter().map(|e| e.name()).collect()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.effects.is_empty()
+        self.terms.is_empty()
     }
 
     /// How many times each effect's forces were evaluated, by name.
     pub fn evaluation_counts(&self) -> Vec<(&'static str, u64)> {
-        self.effects
-            .iter()
-            .zip(&self.evaluations)
-            .map(|(e, c)| (e.name(), c.load(std::sync::atomic::Ordering::Relaxed)))
+        self.entries()
+            .map(|e| (e.effect.name(), e.evaluations.load(Ordering::Relaxed)))
             .collect()
     }
 
     pub fn declare(&self, p: &mut PatternBuilder) {
-        for e in &self.effects {
+        for e in self.iter() {
             e.declare(p);
         }
     }
@@ -71,8 +121,10 @@ impl EffectSet {
     /// `wind` parameter); false when the set has no wind (a scene that does not name wind).
     pub fn set_wind_velocity(&mut self, velocity: Vec3) -> bool {
         let mut any = false;
-        for e in &mut self.effects {
-            any |= e.set_wind_velocity(velocity);
+        for t in &mut self.terms {
+            if let Term::Effect(e) = t {
+                any |= e.set_wind_velocity(velocity);
+            }
         }
         any
     }
@@ -129,7 +181,7 @@ impl EffectSet {
         if !cached {
             crate::linalg::scratch(f, s.x.len());
         }
-        if split && self.effects.iter().any(|e| !e.position_only()) {
+        if split && self.iter().any(|e| !e.position_only()) {
             // Velocity-dependent effects add to the full sum, in the order of a plain pass.
             for (a, b) in f.iter_mut().zip(half.iter()) {
                 *a += *b;
@@ -155,12 +207,12 @@ impl EffectSet {
         if !cached {
             f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         }
-        for (e, c) in self.effects.iter().zip(&self.evaluations) {
-            if cached && e.position_only() {
+        for e in self.entries() {
+            if cached && e.effect.position_only() {
                 continue;
             }
-            c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            e.add_forces(s, f);
+            e.evaluations.fetch_add(1, Ordering::Relaxed);
+            e.effect.add_forces(s, f);
         }
     }
 
@@ -168,7 +220,7 @@ impl EffectSet {
     pub fn injecting_forces(&self, s: &State, f: &mut [Vec3]) -> bool {
         let mut any = false;
         f.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        for e in self.effects.iter().filter(|e| e.injects_energy()) {
+        for e in self.iter().filter(|e| e.injects_energy()) {
             e.add_forces(s, f);
             any = true;
         }
@@ -178,7 +230,7 @@ impl EffectSet {
     pub fn jacobians(&self, s: &State, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
         dfdx.clear();
         dfdv.clear();
-        for e in &self.effects {
+        for e in self.iter() {
             e.add_jacobians(s, dfdx, dfdv);
         }
     }
@@ -192,7 +244,7 @@ impl EffectSet {
             x: &[],
             v: &[],
         };
-        for e in self.effects.iter().filter(|e| e.constant_jacobians()) {
+        for e in self.iter().filter(|e| e.constant_jacobians()) {
             e.add_jacobians(&none, dfdx, dfdv);
         }
     }
@@ -200,13 +252,13 @@ impl EffectSet {
     /// Adds the state-dependent Jacobians at `s` (the complement of
     /// [`EffectSet::constant_jacobians`]).
     pub fn add_varying_jacobians(&self, s: &State, dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
-        for e in self.effects.iter().filter(|e| !e.constant_jacobians()) {
+        for e in self.iter().filter(|e| !e.constant_jacobians()) {
             e.add_jacobians(s, dfdx, dfdv);
         }
     }
 
     pub fn energy(&self, x: &[Vec3]) -> f64 {
-        self.effects.iter().map(|e| e.energy(x)).sum()
+        self.iter().map(|e| e.energy(x)).sum()
     }
 
     /// (elastic, gravity) potential energies at `x`. The position-only forces at `x` are
@@ -251,9 +303,9 @@ impl EffectSet {
             let e = self.energy_part(x, &mut cache.f, 0, 1);
             (e, extra(0..n), None)
         };
-        for (e, c) in self.effects.iter().zip(&self.evaluations) {
-            if e.position_only() {
-                c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        for e in self.entries() {
+            if e.effect.position_only() {
+                e.evaluations.fetch_add(1, Ordering::Relaxed);
             }
         }
         cache.split = n >= PAR_VERTICES;
@@ -269,15 +321,18 @@ impl EffectSet {
         // Position-only effects read neither velocity nor time.
         let s = State { t: 0.0, x, v: &[] };
         let (mut el, mut gr) = (0.0, 0.0);
-        for e in &self.effects {
-            let energy = if e.position_only() {
-                e.add_forces_energy_part(&s, f, part, parts)
+        for Entry {
+            effect, gravity, ..
+        } in self.entries()
+        {
+            let energy = if effect.position_only() {
+                effect.add_forces_energy_part(&s, f, part, parts)
             } else if part == 0 {
-                e.energy(x)
+                effect.energy(x)
             } else {
                 0.0
             };
-            if e.name() == "gravity" {
+            if gravity {
                 gr += energy;
             } else {
                 el += energy;
@@ -288,16 +343,12 @@ impl EffectSet {
 
     /// The gravity vector if a gravity effect is present (zero otherwise).
     pub fn gravity(&self) -> Vec3 {
-        self.gravity
+        self.gravity.as_ref().map_or(Vec3::ZERO, |g| g.g)
     }
 
     /// Stiffness bounds of every elastic effect, stiffest first.
     pub fn stiffness(&self, mass: &[f64]) -> Vec<StiffnessBound> {
-        let mut b: Vec<StiffnessBound> = self
-            .effects
-            .iter()
-            .filter_map(|e| e.stiffness(mass))
-            .collect();
+        let mut b: Vec<StiffnessBound> = self.iter().filter_map(|e| e.stiffness(mass)).collect();
         b.sort_by(|a, b| b.omega_sq.total_cmp(&a.omega_sq));
         b
     }
