@@ -16,6 +16,7 @@ pub mod hard;
 pub mod integrate;
 pub mod linalg;
 pub mod mesh;
+mod par;
 pub mod pose;
 pub mod robot;
 #[cfg(feature = "ros")]

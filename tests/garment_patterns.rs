@@ -236,7 +236,7 @@ fn weld_merges_pairs_and_bends_across_the_seam() {
 fn weld_keeps_mass_and_seam_springs_match_finite_differences() {
     use drape::effects::{Effect, State};
     use drape::garment::seam::SeamSprings;
-    use drape::integrate::PatternBuilder;
+    use drape::linalg::PatternBuilder;
     let g = two_panels();
     let (cloth, seams) = assemble(&g).unwrap();
     let w = weld(&cloth, &seams, "test", g.material);

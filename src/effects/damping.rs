@@ -1,9 +1,9 @@
 //! Damping: along springs, against the air, and velocity diffusion between neighbours.
 //! All three are linear in velocity, so their `df/dv` is exact and constant in `v`.
 
-use super::{Effect, State};
-use crate::integrate::{BlockCsr, PairSlots, PatternBuilder};
+use super::effect::{Effect, State};
 use crate::linalg::outer;
+use crate::linalg::{BlockCsr, PairSlots, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 /// `f_i = -kd ((v_i - v_j) . n) n` along each spring direction `n`.

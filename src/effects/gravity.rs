@@ -1,6 +1,6 @@
 //! Uniform gravity.
 
-use super::{Effect, State};
+use super::effect::{Effect, State};
 use crate::Vec3;
 
 pub struct Gravity {
@@ -38,7 +38,7 @@ impl Effect for Gravity {
 
     /// The vertices of the `part`-th slice, so that both threads of a split pass share the work.
     fn add_forces_energy_part(&self, s: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
-        let r = super::part_range(self.mass.len(), part, parts);
+        let r = crate::par::part_range(self.mass.len(), part, parts);
         let mut energy = 0.0;
         for ((fi, m), xi) in f[r.clone()]
             .iter_mut()

@@ -4,10 +4,10 @@
 //! `-k [n n^T + (1 - l/L)(I - n n^T)]`, with the transverse term clamped at zero under compression
 //! (Choi and Ko): keeping it would make the system matrix indefinite and break conjugate gradients.
 
-use super::{Effect, State, StiffnessBound};
+use super::effect::{Effect, State, StiffnessBound};
 use crate::cloth::topology::Spring;
-use crate::integrate::{BlockCsr, PairSlots, PatternBuilder};
 use crate::linalg::outer;
+use crate::linalg::{BlockCsr, PairSlots, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 pub struct Springs {
@@ -248,7 +248,7 @@ impl Effect for Springs {
     }
 
     fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
-        let r = super::part_range(self.springs.len(), part, parts);
+        let r = crate::par::part_range(self.springs.len(), part, parts);
         forces_energy(
             st.x,
             f,

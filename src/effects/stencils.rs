@@ -5,9 +5,9 @@
 //! (`-c w_a w_b I`), which the implicit solver handles exactly. Separate warp and weft rigidities
 //! give anisotropic cloth, as in the survey's figure of four materials.
 
-use super::{Effect, State, StiffnessBound};
+use super::effect::{Effect, State, StiffnessBound};
 use crate::cloth::topology::Stencil;
-use crate::integrate::{BlockCsr, PatternBuilder};
+use crate::linalg::{BlockCsr, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 /// A set of stencils of one size with one rigidity per stencil: bending (`N = 3`) or twist (`N = 4`).
@@ -99,8 +99,8 @@ impl<const N: usize> StencilSet<N> {
     /// Adds the forces `-c w_k d` and returns the energy `sum c/2 |d|^2`, `d = sum_k w_k x_k`,
     /// of the `part`-th of `parts` slices of the stencils.
     fn add_forces(&self, x: &[Vec3], f: &mut [Vec3], part: usize, parts: usize) -> f64 {
-        let r = super::part_range(self.stencils.len(), part, parts);
-        let (x, f) = (super::flat(x), super::flat_mut(f));
+        let r = crate::par::part_range(self.stencils.len(), part, parts);
+        let (x, f) = (crate::linalg::flat(x), crate::linalg::flat_mut(f));
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).

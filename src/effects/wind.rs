@@ -5,9 +5,9 @@
 //! and sinusoidal gusts, so a flag flaps. `df/dv` is analytic; the dependence of `n` and `A` on
 //! positions is treated explicitly (lagged one step), as usual for aerodynamic loads.
 
-use super::{Effect, State};
-use crate::integrate::{BlockCsr, PatternBuilder};
+use super::effect::{Effect, State};
 use crate::linalg::outer;
+use crate::linalg::{BlockCsr, PatternBuilder};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 

@@ -1,8 +1,7 @@
 //! Seam vertex pairs in the flat particle system and the sewing springs that pull them together.
 
 use crate::effects::{Effect, State};
-use crate::integrate::{BlockCsr, PatternBuilder};
-use crate::linalg::outer;
+use crate::linalg::{outer, BlockCsr, PatternBuilder};
 use crate::{Mat3, Vec3};
 
 /// The vertex pairs of one seam, in global indices of the pre-weld cloth.

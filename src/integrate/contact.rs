@@ -16,8 +16,8 @@
 //! springs the cloth is in or heading into, is refitted after the solve (like the friction
 //! modes, see [`super::friction`]).
 
-use super::sparse::BlockCsr;
 use crate::linalg::outer;
+use crate::linalg::BlockCsr;
 use crate::{Mat3, Vec3};
 
 /// One contact of a static obstacle feature with the cloth point `sum weights_k x_verts_k`.
@@ -159,7 +159,7 @@ impl ContactSpring {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::PatternBuilder;
+    use crate::linalg::PatternBuilder;
 
     fn spring() -> ContactSpring {
         ContactSpring {

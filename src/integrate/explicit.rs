@@ -6,8 +6,9 @@
 
 use super::dynamics::Dynamics;
 use super::integrator::{Capabilities, Integrator, StepReport};
-use crate::effects::{State, PAR_VERTICES};
+use crate::effects::State;
 use crate::linalg::Filter;
+use crate::par::PAR_VERTICES;
 use crate::Vec3;
 use std::ops::Range;
 
@@ -144,7 +145,7 @@ fn update<const SYMPLECTIC: bool>(mut e: UpdateEnds, s: UpdateStarts, h: f64) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn update_avx2<const SYMPLECTIC: bool>(mut e: UpdateEnds, s: UpdateStarts, h: f64) {
-    use crate::effects::{flat, flat_mut};
+    use crate::linalg::{flat, flat_mut};
     use std::arch::x86_64::*;
     let n = e.x.len();
     let (x0, v0, f) = (flat(s.x0), flat(s.v0), flat(s.f));
@@ -207,7 +208,7 @@ pub(super) fn split_update(x: &mut [Vec3], v: &mut [Vec3], body: &VertexUpdate) 
         let mid = n / 2;
         let (xa, xb) = x[..n].split_at_mut(mid);
         let (va, vb) = v[..n].split_at_mut(mid);
-        crate::effects::pair::join(|| body(0..mid, xa, va), || body(mid..n, xb, vb));
+        crate::par::join(|| body(0..mid, xa, va), || body(mid..n, xb, vb));
     } else {
         body(0..n, &mut x[..n], &mut v[..n]);
     }
@@ -225,7 +226,7 @@ impl InverseMass {
     /// `1 / m` per vertex for these masses.
     pub(super) fn of(&mut self, mass: &[f64]) -> &[f64] {
         // Bit patterns (a `memcmp`): a float comparison costs a scalar loop per step.
-        if crate::effects::flat_bits(&self.mass) != crate::effects::flat_bits(mass) {
+        if crate::linalg::flat_bits(&self.mass) != crate::linalg::flat_bits(mass) {
             self.mass.clear();
             self.mass.extend_from_slice(mass);
             self.inv.clear();

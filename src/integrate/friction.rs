@@ -24,8 +24,8 @@
 //! the Coulomb limit (its neighbours pull much harder than `mu N`: a cloth edge shoved by a
 //! robot link) becomes a slider; the system is then solved once more with the new modes.
 
-use super::sparse::BlockCsr;
 use crate::linalg::outer;
+use crate::linalg::BlockCsr;
 use crate::linalg::Filter;
 use crate::{Mat3, Vec3};
 

@@ -21,9 +21,9 @@ use super::dynamics::Dynamics;
 use super::friction::{self, Drag};
 use super::integrator::{Capabilities, Integrator, StepReport};
 use super::precond::{Csr, Multigrid};
-use super::sparse::{BlockCsr, PatternBuilder};
 use crate::effects::{EffectSet, State};
 use crate::linalg::{scratch, Filter};
+use crate::linalg::{BlockCsr, PatternBuilder};
 use crate::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 

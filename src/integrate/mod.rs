@@ -13,7 +13,6 @@ mod integrator;
 mod kind;
 mod precond;
 mod rk4;
-mod sparse;
 
 pub use contact::ContactSpring;
 pub use dynamics::{Constraints, Dynamics};
@@ -23,4 +22,3 @@ pub use implicit::{Implicit, ImplicitSettings};
 pub use integrator::{Capabilities, Integrator, StepReport};
 pub use kind::IntegratorKind;
 pub use rk4::Rk4;
-pub use sparse::{BlockCsr, PairSlots, PatternBuilder};

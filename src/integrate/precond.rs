@@ -16,8 +16,7 @@
 //! translation near-null space (one 3x3 identity per vertex), smoothed once with damped block
 //! Jacobi, Galerkin coarse matrices `P^T A P`, dense Cholesky on the coarsest level.
 
-use super::sparse::BlockCsr;
-use crate::linalg::Filter;
+use crate::linalg::{BlockCsr, Filter};
 use crate::{Mat3, Vec3};
 use glam::{Mat3A as M3, Vec3A as V3};
 use rayon::prelude::*;
@@ -1055,7 +1054,7 @@ fn cycle(levels: &mut [Level], dense: Option<&Dense>, tmp: &mut Vec<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::PatternBuilder;
+    use crate::linalg::PatternBuilder;
 
     /// The two-halves filtering of a large matrix is the serial one, block for block.
     #[test]

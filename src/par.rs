@@ -1,5 +1,6 @@
-//! A two-way fork-join for the step's passes over large cloths, on one helper thread that
-//! spins between jobs.
+//! Infrastructure: a two-way fork-join for the step's passes over large cloths, on one helper
+//! thread that spins between jobs, and the fixed split of a pass into halves. The force terms
+//! (`effects`) and the integrators (`integrate`) both split their passes here.
 //!
 //! Why not `rayon::join`: called from outside the pool (the simulation's own thread), each join
 //! hands the work to a pool thread and puts the caller to sleep until it is done. On this 2-vCPU
@@ -19,6 +20,16 @@ use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::OnceLock;
 use std::thread::Thread;
 use std::time::{Duration, Instant};
+
+/// Vertex count from which the energy-and-force pass and the explicit update are split in two
+/// halves run on two threads (below it, waking a thread costs about as much as the pass). The
+/// split depends on the size only, so results do not depend on the number of threads.
+pub(crate) const PAR_VERTICES: usize = 2048;
+
+/// The index range of the `part`-th of `parts` near-equal slices of `len` elements.
+pub(crate) fn part_range(len: usize, part: usize, parts: usize) -> std::ops::Range<usize> {
+    len * part / parts..len * (part + 1) / parts
+}
 
 /// How long the helper spins for the next job before parking.
 const SPIN: Duration = Duration::from_micros(50);
