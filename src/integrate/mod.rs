@@ -4,6 +4,7 @@
 //! `integrator.rs` holds the trait with its capabilities and step report, `dynamics.rs` what a
 //! step integrates (effects, masses, constraints), `kind.rs` the scene's choice of method.
 
+mod cg;
 mod contact;
 mod dynamics;
 mod explicit;
@@ -13,6 +14,8 @@ mod integrator;
 mod kind;
 mod precond;
 mod rk4;
+#[cfg(test)]
+mod test_systems;
 
 pub use contact::ContactSpring;
 pub use dynamics::{Constraints, Dynamics};

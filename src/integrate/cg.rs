@@ -1,0 +1,237 @@
+//! The modified preconditioned conjugate gradient of Baraff and Witkin (section 5.3): solves
+//! `S A S dv = S b` with the constrained components of `dv` fixed, every iterate kept inside the
+//! constraint set by the per-vertex filter `S`, started from the best combination of up to two
+//! guesses in the energy norm.
+
+use super::precond::Multigrid;
+use crate::linalg::{scratch, BlockCsr, Filter};
+use crate::{Mat3, Vec3};
+
+/// What one conjugate-gradient solve did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SolveStats {
+    pub iterations: u32,
+    /// `|S (b - A dv)| / |S b|` at exit.
+    pub residual: f64,
+}
+
+/// Scratch vectors of the modified PCG.
+#[derive(Default)]
+pub(crate) struct Pcg {
+    pinv: Vec<Mat3>,
+    r: Vec<Vec3>,
+    c: Vec<Vec3>,
+    q: Vec<Vec3>,
+    s: Vec<Vec3>,
+    /// The second start direction and its product.
+    h: Vec<Vec3>,
+    ah: Vec<Vec3>,
+}
+
+impl Pcg {
+    /// Solves `S A S dv = S b` with `(I - S) dv = z` by the modified PCG (Baraff-Witkin, section
+    /// 5.3). `dv` holds the initial guess (its free components are used), `mg` the preconditioner
+    /// (block Jacobi when `None`). Stops at `|S r| <= tol |S b|`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn solve(
+        &mut self,
+        a: &BlockCsr,
+        filt: &[Filter],
+        b: &[Vec3],
+        z: &[Vec3],
+        mut mg: Option<&mut Multigrid>,
+        tol: f64,
+        max_iterations: u32,
+        dv: &mut [Vec3],
+        second: Option<&[Vec3]>,
+    ) -> SolveStats {
+        let n = b.len();
+        for buf in [&mut self.r, &mut self.c, &mut self.q, &mut self.s] {
+            scratch(buf, n);
+        }
+        self.pinv.resize(n, Mat3::IDENTITY);
+        let (mut guess, mut target) = (false, false);
+        for i in 0..n {
+            let di = a.diagonal(i);
+            let inv = di.inverse();
+            self.pinv[i] = if di.determinant().abs() > 0.0 && inv.is_finite() {
+                inv
+            } else {
+                Mat3::IDENTITY
+            };
+            // The free part of the guess in `c`, the constrained part (`z`) in `dv`.
+            self.c[i] = filt[i].apply(dv[i]);
+            dv[i] = z[i];
+            guess |= self.c[i] != Vec3::ZERO;
+            target |= z[i] != Vec3::ZERO;
+        }
+        // r = S (b - A z): the residual of the start without the guess.
+        if target {
+            a.mul(dv, &mut self.q);
+        } else {
+            self.q.fill(Vec3::ZERO);
+        }
+        let mut bnorm2 = 0.0;
+        for i in 0..n {
+            let sb = filt[i].apply(b[i]);
+            self.r[i] = sb - filt[i].apply(self.q[i]);
+            bnorm2 += sb.length_squared();
+        }
+        // The guess enters as the combination of its directions (`g`, and `h` when given) that
+        // minimises the error's energy norm over their span (a Galerkin step on `S A S`): never
+        // worse than starting from zero, exact when the solution lies in the span.
+        if guess {
+            a.mul(&self.c, &mut self.q);
+            let (mut gr, mut gag) = (0.0, 0.0);
+            for i in 0..n {
+                self.q[i] = filt[i].apply(self.q[i]);
+                gr += self.c[i].dot(self.r[i]);
+                gag += self.c[i].dot(self.q[i]);
+            }
+            let mut two = None;
+            if let Some(second) = second.filter(|h| h.len() == n) {
+                scratch(&mut self.h, n);
+                scratch(&mut self.ah, n);
+                for i in 0..n {
+                    self.h[i] = filt[i].apply(second[i]);
+                }
+                a.mul(&self.h, &mut self.ah);
+                let (mut hr, mut hah, mut gah) = (0.0, 0.0, 0.0);
+                for i in 0..n {
+                    self.ah[i] = filt[i].apply(self.ah[i]);
+                    hr += self.h[i].dot(self.r[i]);
+                    hah += self.h[i].dot(self.ah[i]);
+                    gah += self.c[i].dot(self.ah[i]);
+                }
+                // 2x2 Gram system; skipped when `h` is (nearly) parallel to `g`.
+                let det = gag * hah - gah * gah;
+                if det > 1e-8 * gag * hah {
+                    let (ag, ah) = ((gr * hah - hr * gah) / det, (hr * gag - gr * gah) / det);
+                    if ag.is_finite() && ah.is_finite() {
+                        two = Some((ag, ah));
+                    }
+                }
+            }
+            // With one direction, `h` is `g` with coefficient zero.
+            let (ag, ah, h, ahv) = match two {
+                Some((ag, ah)) => (ag, ah, &self.h, &self.ah),
+                None if gag > 0.0 && (gr / gag).is_finite() => (gr / gag, 0.0, &self.c, &self.q),
+                None => (0.0, 0.0, &self.c, &self.q),
+            };
+            // Taken only when it also lowers the residual PCG stops on: the energy-norm optimum
+            // can leave a larger residual than the zero start (at loose tolerances, e.g. the
+            // node's real-time preview at 1e-2, that costs iterations).
+            let (mut before, mut after) = (0.0, 0.0);
+            for i in 0..n {
+                before += self.r[i].length_squared();
+                after += (self.r[i] - self.q[i] * ag - ahv[i] * ah).length_squared();
+            }
+            if (ag != 0.0 || ah != 0.0) && after < before {
+                for i in 0..n {
+                    dv[i] += self.c[i] * ag + h[i] * ah;
+                    self.r[i] -= self.q[i] * ag + ahv[i] * ah;
+                }
+            }
+        }
+        let rnorm2: f64 = self.r.iter().map(|r| r.length_squared()).sum();
+        let mut rnorm2 = rnorm2;
+        let bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
+        let tol2 = tol * tol;
+        let precondition =
+            |pinv: &[Mat3], mg: &mut Option<&mut Multigrid>, r: &[Vec3], out: &mut [Vec3]| {
+                match mg {
+                    Some(mg) => mg.apply(r, out),
+                    None => out
+                        .iter_mut()
+                        .zip(r)
+                        .zip(pinv)
+                        .for_each(|((o, r), p)| *o = *p * *r),
+                }
+                out.iter_mut().zip(filt).for_each(|(o, f)| *o = f.apply(*o));
+            };
+        precondition(&self.pinv, &mut mg, &self.r, &mut self.c);
+        let mut delta = dot(&self.r, &self.c);
+        let mut iterations = 0;
+        while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
+            a.mul(&self.c, &mut self.q);
+            let mut cq = 0.0;
+            for ((q, c), f) in self.q.iter_mut().zip(&self.c).zip(filt) {
+                *q = f.apply(*q);
+                cq += c.dot(*q);
+            }
+            if cq <= 0.0 || !cq.is_finite() || delta <= 0.0 || !delta.is_finite() {
+                // Not positive definite along c (only possible with degenerate input): stop with
+                // the best iterate so far rather than divide by zero.
+                break;
+            }
+            let alpha = delta / cq;
+            rnorm2 = 0.0;
+            for (((x, r), c), q) in dv.iter_mut().zip(&mut self.r).zip(&self.c).zip(&self.q) {
+                *x += *c * alpha;
+                *r -= *q * alpha;
+                rnorm2 += r.length_squared();
+            }
+            iterations += 1;
+            if rnorm2 <= tol2 * bnorm2 {
+                break;
+            }
+            precondition(&self.pinv, &mut mg, &self.r, &mut self.s);
+            let delta_old = delta;
+            delta = dot(&self.r, &self.s);
+            let beta = delta / delta_old;
+            for (c, s) in self.c.iter_mut().zip(&self.s) {
+                *c = *s + *c * beta;
+            }
+        }
+        SolveStats {
+            iterations,
+            residual: (rnorm2 / bnorm2).sqrt(),
+        }
+    }
+}
+
+pub(crate) fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::test_systems::*;
+    /// The start from the span of two directions: exact (no iteration) when the solution lies
+    /// in it, while the first direction alone needs iterations; a useless second direction
+    /// (parallel to the first, or not finite) falls back to the first alone.
+    #[test]
+    fn start_directions_span_the_solution() {
+        let a = cloth_system(12);
+        let n = a.rows();
+        let mut rng = Rng(21);
+        let (filt, z) = constraints(n, &mut rng);
+        let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+        let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+        let e: Vec<Vec3> = (0..n).map(|_| rng.vec3() * 0.1).collect();
+        // x = (g - h) / 0.3 on the free components.
+        let g: Vec<Vec3> = x.iter().zip(&e).map(|(x, e)| *x * 0.3 + *e).collect();
+        let run = |second: Option<&[Vec3]>| {
+            let mut dv = g.clone();
+            let s = Pcg::default().solve(&a, &filt, &b, &z, None, 1e-9, 10_000, &mut dv, second);
+            (dv, s)
+        };
+        let (dv, two) = run(Some(&e));
+        assert_eq!(two.iterations, 0, "{two:?}");
+        let scale = x.iter().map(|v| v.length()).fold(0.0, f64::max);
+        for i in 0..n {
+            assert!((dv[i] - x[i]).length() <= 1e-6 * scale, "vertex {i}");
+        }
+        let (_, one) = run(None);
+        assert!(one.iterations > 5, "{one:?}");
+        let parallel: Vec<Vec3> = g.iter().map(|v| *v * 2.0).collect();
+        let mut bad = e.clone();
+        bad[3] = Vec3::NAN;
+        for second in [&parallel, &bad] {
+            let (dv, s) = run(Some(second));
+            assert_eq!(s.iterations, one.iterations, "{s:?} vs {one:?}");
+            assert!(s.residual <= 1e-9 && dv.iter().all(|v| v.is_finite()));
+        }
+    }
+}

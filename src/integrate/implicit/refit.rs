@@ -1,0 +1,81 @@
+//! The step's active sets after a solve: friction drags refitted to the sliding speed (see
+//! [`crate::integrate::friction`]) and contact springs switched on or off by where the solved
+//! step ends (see [`crate::integrate::contact`]); each change updates `A` and `b` in place.
+
+use super::assembly::spring_terms;
+use super::solver::Implicit;
+use crate::effects::State;
+use crate::integrate::Dynamics;
+use crate::Vec3;
+
+impl Implicit {
+    /// [`Self::refit_drags`] for the edge springs' contact points.
+    pub(super) fn refit_edge_drags(&mut self, d: &Dynamics, v0: &[Vec3], h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let mut changed = false;
+        for (k, g) in self.edge_drags.iter_mut() {
+            let c = &d.constraints.contacts[*k];
+            let u0 = c.point_velocity(v0);
+            let Some(mode) = g.refit(u0 + c.point_velocity(&self.dv)) else {
+                continue;
+            };
+            let (old_force, old_damping) = (g.force(u0), g.damping());
+            g.mode = mode;
+            c.add_point_block(a, g.damping() - old_damping, h);
+            c.add_point_force(g.force(u0) - old_force, h, &mut self.b);
+            changed = true;
+        }
+        changed
+    }
+
+    /// Adds (`sign` 1) or removes (-1) edge springs so that exactly those whose cloth point ends
+    /// the solved step inside their layer act (see [`super::contact`]); returns whether any
+    /// changed (the system then needs a new solve).
+    pub(super) fn refit_springs(&mut self, d: &Dynamics, s: &State, h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let n = s.x.len();
+        let mut changed = false;
+        for (c, active) in d
+            .constraints
+            .contacts
+            .iter()
+            .zip(self.spring_active.iter_mut())
+        {
+            if !c.is_valid(n) {
+                continue;
+            }
+            let wanted = c.depth_after(s.x, s.v, h) - h * c.along(&self.dv) > 0.0;
+            if wanted != *active {
+                spring_terms(c, a, &mut self.b, s, h, if wanted { 1.0 } else { -1.0 });
+                *active = wanted;
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
+    /// [`super::friction`]); returns whether any changed (the system then needs a new solve).
+    pub(super) fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
+        let Some(a) = self.a.as_mut() else {
+            return false;
+        };
+        let mut changed = false;
+        for g in self.drags.iter_mut() {
+            let i = g.vertex;
+            let Some(mode) = g.refit(v0[i] + self.dv[i]) else {
+                continue;
+            };
+            let (old_force, old_damping) = (g.force(v0[i]), g.damping());
+            g.mode = mode;
+            a.add(i as u32, i as u32, (g.damping() - old_damping) * h);
+            self.b[i] += (g.force(v0[i]) - old_force) * h;
+            changed = true;
+        }
+        changed
+    }
+}

@@ -1,0 +1,28 @@
+//! The implicit solver's settings, as a scene file gives them, and its choice of preconditioner.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImplicitSettings {
+    /// Relative residual at which conjugate gradients stop.
+    pub cg_tolerance: f64,
+    pub cg_max_iterations: u32,
+}
+
+impl Default for ImplicitSettings {
+    fn default() -> Self {
+        Self {
+            cg_tolerance: 1e-5,
+            cg_max_iterations: 200,
+        }
+    }
+}
+
+/// Which `M^-1` the conjugate gradient uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preconditioner {
+    BlockJacobi,
+    /// Smoothed-aggregation multigrid, falling back to block Jacobi when its setup fails.
+    Multigrid,
+}

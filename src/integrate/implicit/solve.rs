@@ -1,0 +1,139 @@
+//! The step's linear solves: the modified PCG preconditioned by the multigrid hierarchy kept
+//! across steps (block Jacobi when it cannot be built or breaks down).
+
+use super::hierarchy::{Hierarchy, REBUILD_EVERY, REFRESH_COST};
+use super::settings::Preconditioner;
+use super::solver::Implicit;
+use crate::integrate::cg::SolveStats;
+use crate::integrate::precond::Multigrid;
+use crate::linalg::Filter;
+use crate::Vec3;
+
+impl Implicit {
+    /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
+    /// `history`: `dv` holds the last step's velocity change and `older` the one before, both
+    /// start directions (else `dv` alone).
+    pub(super) fn solve(&mut self, filt: &[Filter], history: bool) -> SolveStats {
+        let (tol, max_it) = (self.settings.cg_tolerance, self.settings.cg_max_iterations);
+        let use_mg = self.update_hierarchy(filt).is_some();
+        let Some(a) = self.a.as_ref() else {
+            unreachable!("prepared above");
+        };
+        let mgref = match self.hierarchy.as_mut() {
+            Some(h) if use_mg => Some(&mut h.mg),
+            _ => None,
+        };
+        let second = history.then_some(self.older.as_slice());
+        let mut stats = self.pcg.solve(
+            a,
+            filt,
+            &self.b,
+            &self.z,
+            mgref,
+            tol,
+            max_it,
+            &mut self.dv,
+            second,
+        );
+        if use_mg && (stats.residual.is_nan() || stats.residual > tol) && stats.iterations < max_it
+        {
+            // The multigrid-preconditioned iteration broke down early (degenerate input): retry
+            // from scratch with block Jacobi and rebuild the hierarchy next step.
+            log::debug!("multigrid PCG stopped early ({stats:?}); retrying with block Jacobi");
+            self.hierarchy = None;
+            self.dv.iter_mut().for_each(|x| *x = Vec3::ZERO);
+            stats = self.pcg.solve(
+                a,
+                filt,
+                &self.b,
+                &self.z,
+                None,
+                tol,
+                max_it,
+                &mut self.dv,
+                None,
+            );
+        }
+        if let Some(h) = self.hierarchy.as_mut() {
+            let its = stats.iterations;
+            if h.steps == 0 {
+                h.iterations_at_build = its;
+                h.excess = 0;
+                if h.age == 0 {
+                    h.iterations_at_full = its;
+                }
+            } else if its > h.iterations_at_full + h.iterations_at_full / 4 + 2 {
+                h.age = REBUILD_EVERY; // drifted despite the cheap rebuilds: full rebuild next
+            } else {
+                // The coarse levels go stale as the cloth turns: new values once the iterations
+                // lost to staleness add up to what the rebuild costs (at most twice the best
+                // rebuild schedule's cost, as in ski rental).
+                h.excess += its.saturating_sub(h.iterations_at_build);
+                h.rebuild = h.excess >= REFRESH_COST;
+            }
+        }
+        stats
+    }
+
+    /// Gives the multigrid the current filtered matrix: a fresh hierarchy when none exists or the
+    /// last one has aged (iterations drifting up or `REBUILD_EVERY` steps), else only the finest
+    /// level. `None` means block Jacobi (multigrid disabled or its setup failed).
+    pub(super) fn update_hierarchy(&mut self, filt: &[Filter]) -> Option<&mut Multigrid> {
+        if self.preconditioner != Preconditioner::Multigrid {
+            return None;
+        }
+        let a = self.a.as_ref()?;
+        let n = a.rows();
+        let mut fine = match self.hierarchy.as_mut() {
+            Some(h) => h.mg.take_finest(),
+            None => std::mem::take(&mut self.filtered),
+        };
+        fine.filtered(a, filt);
+        let reuse = self
+            .hierarchy
+            .as_ref()
+            .is_some_and(|h| h.mg.rows() == n && h.age < REBUILD_EVERY);
+        if reuse {
+            if let Some(h) = self.hierarchy.as_mut() {
+                let rebuild = h.rebuild;
+                let done = if rebuild {
+                    h.mg.rebuild(fine)
+                } else {
+                    h.mg.refresh_finest(fine)
+                };
+                match done {
+                    Ok(()) => {
+                        h.age += 1;
+                        h.steps = if rebuild { 0 } else { h.steps + 1 };
+                        h.rebuild = false;
+                        return self.hierarchy.as_mut().map(|h| &mut h.mg);
+                    }
+                    Err(e) => {
+                        log::debug!("multigrid refresh failed ({e}); rebuilding");
+                        self.hierarchy = None;
+                        return None;
+                    }
+                }
+            }
+        }
+        match Multigrid::build(fine) {
+            Ok(mg) => {
+                self.hierarchy = Some(Hierarchy {
+                    mg,
+                    steps: 0,
+                    age: 0,
+                    iterations_at_build: 0,
+                    iterations_at_full: 0,
+                    excess: 0,
+                    rebuild: false,
+                });
+                self.hierarchy.as_mut().map(|h| &mut h.mg)
+            }
+            Err(e) => {
+                log::debug!("multigrid setup failed ({e}); using block Jacobi");
+                self.hierarchy = None;
+                None
+            }
+        }
+    }
+}

@@ -1,0 +1,170 @@
+//! One implicit step as a table of contents: assemble the linearised system, solve it from the
+//! last steps' velocity changes, refit friction drags, contact springs and holds (at most
+//! `MAX_REFITS` solves), then Newton iterations while the step creates energy.
+
+use super::newton::potential;
+use super::solver::Implicit;
+use crate::effects::State;
+use crate::integrate::integrator::{Integrator, StepReport};
+use crate::integrate::Dynamics;
+use crate::linalg::{scratch, Filter};
+use crate::Vec3;
+
+/// Solves at most with friction drags refitted to the sliding speed (see [`super::friction`]).
+const MAX_REFITS: u32 = 2;
+
+/// Newton iterations at most beyond Baraff and Witkin's one linearised solve.
+const MAX_NEWTON: u32 = 8;
+
+impl Implicit {
+    pub(super) fn step_in_pool(
+        &mut self,
+        d: &Dynamics,
+        t: f64,
+        h: f64,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+        report: &mut StepReport,
+    ) {
+        let n = x.len();
+        if self.a.as_ref().is_none_or(|a| a.rows() != n) {
+            self.prepare(d.effects, n);
+        }
+        for buf in [
+            &mut self.f0,
+            &mut self.b,
+            &mut self.dv,
+            &mut self.z,
+            &mut self.xk,
+            &mut self.vk,
+        ] {
+            scratch(buf, n);
+        }
+        // The step's own copy of the filter: contacts whose constraint would pull the vertex
+        // into the surface are released during the step.
+        let mut filter = std::mem::take(&mut self.filter);
+        filter.clone_from(&d.constraints.filter);
+        self.released.clear();
+        let filt = &mut filter;
+        self.assemble(d, &State { t, x, v }, h);
+        // Constrained components of dv are fixed: z = (I - S)(v_target - v).
+        for i in 0..n {
+            self.z[i] = filt[i].constrained(d.constraints.target_velocity[i] - v[i]);
+        }
+        // The start directions: the last two steps' velocity changes.
+        self.last.clone_from(&self.dv);
+        let mut stats = self.solve(filt, true);
+        std::mem::swap(&mut self.older, &mut self.last);
+        let mut cg_iterations = stats.iterations;
+        // Contact holds to settle (their impulses cost a product with the matrix).
+        let holds = filt.iter().any(|f| matches!(f, Filter::Direction(_)));
+        let mut impulses_current = false;
+        for _ in 0..MAX_REFITS {
+            let drags = self.refit_drags(v, h);
+            let springs = self.refit_springs(d, &State { t, x, v }, h);
+            let edge_drags = self.refit_edge_drags(d, v, h);
+            let mut released = false;
+            if holds {
+                self.linear_impulses(filt);
+                impulses_current = true;
+                released = self.settle_holds(filt, d, v);
+            }
+            if !(drags || springs || edge_drags || released) {
+                break;
+            }
+            stats = self.solve(filt, false);
+            cg_iterations += stats.iterations;
+            impulses_current = false;
+        }
+        if !impulses_current {
+            self.linear_impulses(filt);
+        }
+
+        // Newton iterations on the nonlinear backward-Euler system, only while the step creates
+        // energy (see `EnergyCheck`).
+        // The potential at `x` is known when `x` is exactly where the last step ended (nothing
+        // moved it since: no collision response, no kinematic reset off it).
+        let u0 = match self.end_potential {
+            Some(u) if self.xk.as_slice() == &x[..] => u,
+            _ => potential(d, x),
+        };
+        self.end_potential = None;
+        let mut newton = 0;
+        let mut best: Option<f64> = None;
+        loop {
+            for i in 0..n {
+                self.vk[i] = v[i] + self.dv[i];
+                self.xk[i] = x[i] + self.vk[i] * h;
+            }
+            let check = self.energy_check(d, t + h, h, v, u0);
+            // A non-finite iterate is the divergence guard's case, not Newton's.
+            if check.accepted() || !check.created.is_finite() {
+                self.end_potential = check.accepted().then_some(check.u1);
+                break;
+            }
+            // Keep the iterate that created the least energy in case none is accepted.
+            if best.is_none_or(|b| check.created < b) {
+                best = Some(check.created);
+                self.best.clone_from(&self.dv);
+            }
+            if newton == MAX_NEWTON {
+                log::debug!(
+                    "implicit step still creates energy after {newton} Newton iterations \
+                     ({check:?}); keeping the best iterate"
+                );
+                std::mem::swap(&mut self.dv, &mut self.best);
+                break;
+            }
+            newton += 1;
+            let (xk, vk) = (std::mem::take(&mut self.xk), std::mem::take(&mut self.vk));
+            self.assemble_matrix(
+                d,
+                &State {
+                    t: t + h,
+                    x: &xk,
+                    v: &vk,
+                },
+                h,
+            );
+            (self.xk, self.vk) = (xk, vk);
+            // Solve for the correction: `b` holds `-g`, and the constrained part is met already.
+            // `dv` moves to `delta` while the correction is solved for in `dv` (from zero).
+            std::mem::swap(&mut self.dv, &mut self.delta);
+            scratch(&mut self.dv, n);
+            self.dv.fill(Vec3::ZERO);
+            self.z.fill(Vec3::ZERO);
+            stats = self.solve(filt, false);
+            cg_iterations += stats.iterations;
+            for (total, c) in self.delta.iter_mut().zip(&self.dv) {
+                *total += *c;
+            }
+            std::mem::swap(&mut self.dv, &mut self.delta);
+        }
+
+        if newton > 0 {
+            // Newton's last residual `g = M dv - h f(x1, v1)` (in `b` as `-g`): converged, its
+            // constrained part is the reaction of the nonlinear system.
+            for i in 0..n {
+                self.impulses[i] = filt[i].constrained(-self.b[i]);
+            }
+        }
+        for i in 0..n {
+            v[i] += self.dv[i];
+            x[i] += v[i] * h;
+        }
+        report.contact_forces.clear();
+        report
+            .contact_forces
+            .extend(d.constraints.contacts.iter().map(|c| {
+                if c.is_valid(n) {
+                    c.force(x)
+                } else {
+                    0.0
+                }
+            }));
+        self.filter = filter;
+        report.force_evaluations = 2 + newton;
+        report.cg_iterations = cg_iterations;
+        report.cg_residual = stats.residual;
+    }
+}
