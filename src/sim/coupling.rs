@@ -18,7 +18,7 @@
 use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
 use crate::effects::{EffectSet, State};
-use crate::integrate::{Constraints, ContactSpring, Friction};
+use crate::integrate::{Capabilities, Constraints, ContactSpring, Friction};
 use crate::linalg::Filter;
 use crate::Vec3;
 
@@ -29,13 +29,6 @@ use crate::Vec3;
 /// newtons and slowed a frictionless strip sliding over the edge (0.39 m instead of 0.57 m in
 /// 2 s).
 const CONTACT_STIFFNESS: f64 = 1e3;
-
-/// Which contact terms the integrator solves itself (the others stay with the stage).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Solves {
-    pub friction: bool,
-    pub contacts: bool,
-}
 
 /// The coupling's state: this substep's constraints and holds, the lagged forces of the last
 /// solve, and the feedback for the stage.
@@ -87,17 +80,17 @@ impl Coupling {
     }
 
     /// Contacts in: the last collision pass's contacts become this substep's constraints
-    /// (edge springs first, then the held vertices' filter and friction). `scratch` holds the
-    /// start forces.
+    /// (edge springs first, then the held vertices' filter and friction), as far as the
+    /// integrator solves them (`caps`). `scratch` holds the start forces.
     pub fn contacts_in(
         &mut self,
         stage: Option<&CollisionStage>,
         s: &StartState,
-        solves: Solves,
+        caps: &Capabilities,
         scratch: &mut Vec<Vec3>,
     ) {
-        self.edge_springs(stage, s, solves);
-        self.contact_constraints(stage, s, solves.friction, scratch);
+        self.edge_springs(stage, s, caps);
+        self.contact_constraints(stage, s, caps.solves_friction, scratch);
     }
 
     /// The solve is done: its edge springs' end forces (`None` when it does not solve them)
@@ -186,9 +179,14 @@ impl Coupling {
     /// [`ContactSpring`]), with in-solve Coulomb friction whose limit is `mu` times the force
     /// the same contact's spring ended the last substep with, shared by weight. The stage then
     /// leaves those contacts to the solver unless they end deep.
-    fn edge_springs(&mut self, stage: Option<&CollisionStage>, s: &StartState, solves: Solves) {
+    fn edge_springs(
+        &mut self,
+        stage: Option<&CollisionStage>,
+        s: &StartState,
+        caps: &Capabilities,
+    ) {
         self.constraints.contacts.clear();
-        if !solves.contacts {
+        if !caps.solves_contacts {
             return;
         }
         // The scene's substep, not a subdivided one: a spring stiffened by `1 / h^2` as the guard
@@ -233,7 +231,7 @@ impl Coupling {
             let normal_force = lagged
                 .binary_search_by(|l| l.0.cmp(&c.verts))
                 .map_or(0.0, |k| lagged[k].1);
-            if solves.friction {
+            if caps.solves_friction {
                 spring.friction = c.mu * normal_force;
             }
             sprung.push(c.verts);

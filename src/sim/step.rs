@@ -21,7 +21,7 @@
 //! [`EffectSet::energy_split`]: crate::effects::EffectSet::energy_split
 //! [`Integrator::step_into`]: crate::integrate::Integrator::step_into
 
-use super::coupling::{Solves, StartState};
+use super::coupling::StartState;
 use super::energy::Energies;
 use super::error::{DivergenceError, Symptom};
 use super::guard::{self, DivergencePolicy, Sample};
@@ -155,13 +155,10 @@ impl Simulation {
             t,
             h_scene: self.settings.substep(),
         };
-        let solves = Solves {
-            friction: self.model.caps.solves_friction,
-            contacts: self.model.caps.solves_contacts,
-        };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
-        self.coupling.contacts_in(stage, &start, solves, scratch);
+        let caps = &self.model.caps;
+        self.coupling.contacts_in(stage, &start, caps, scratch);
     }
 
     /// The forces from outside the cloth at the start of the substep, for the guard (into
