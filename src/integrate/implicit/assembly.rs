@@ -95,7 +95,7 @@ impl Implicit {
 }
 
 /// Backward Euler's terms of edge spring `c` linearised at the start state `s`, times `sign`:
-/// `A += h^2 k J` and `b += h (f(x0) + h df/dx v0)` (see [`super::contact`]).
+/// `A += h^2 k J` and `b += h (f(x0) + h df/dx v0)` (see [`crate::integrate::contact`]).
 pub(super) fn spring_terms(
     c: &ContactSpring,
     a: &mut BlockCsr,

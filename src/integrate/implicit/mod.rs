@@ -6,7 +6,7 @@
 //! constraint set: the filter `S_i = I - p p^T` removes constrained directions and the constrained
 //! components of `dv` are fixed to `z` (the velocity change that meets the target).
 //!
-//! When that one solve creates energy (stiff springs rotating: see [`EnergyCheck`]), Newton
+//! When that one solve creates energy (stiff springs rotating: see `newton::EnergyCheck`), Newton
 //! iterations on the nonlinear system `M dv = h f(x0 + h v1, v1)` follow until it no longer does;
 //! ordinary cloth steps pass the check after the single solve and cost one extra force pass.
 //!

@@ -31,7 +31,7 @@ impl Implicit {
     }
 
     /// Adds (`sign` 1) or removes (-1) edge springs so that exactly those whose cloth point ends
-    /// the solved step inside their layer act (see [`super::contact`]); returns whether any
+    /// the solved step inside their layer act (see [`crate::integrate::contact`]); returns whether any
     /// changed (the system then needs a new solve).
     pub(super) fn refit_springs(&mut self, d: &Dynamics, s: &State, h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
@@ -59,7 +59,7 @@ impl Implicit {
     }
 
     /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
-    /// [`super::friction`]); returns whether any changed (the system then needs a new solve).
+    /// [`crate::integrate::friction`]); returns whether any changed (the system then needs a new solve).
     pub(super) fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
             return false;

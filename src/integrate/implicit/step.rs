@@ -10,7 +10,7 @@ use crate::integrate::Dynamics;
 use crate::linalg::{scratch, Filter};
 use crate::Vec3;
 
-/// Solves at most with friction drags refitted to the sliding speed (see [`super::friction`]).
+/// Solves at most with friction drags refitted to the sliding speed (see [`crate::integrate::friction`]).
 const MAX_REFITS: u32 = 2;
 
 /// Newton iterations at most beyond Baraff and Witkin's one linearised solve.

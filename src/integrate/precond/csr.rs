@@ -1,0 +1,500 @@
+//! The multigrid's own block CSR in single precision (`Mat3A` blocks): the filtered fine
+//! operator `S A S + c (I - S)` with negligible positive couplings lumped, products, transposes
+//! and Galerkin products `P^T A P`.
+
+use super::error::MultigridError;
+use crate::linalg::{BlockCsr, Filter};
+use crate::Mat3;
+use glam::{Mat3A as M3, Vec3A as V3};
+use rayon::prelude::*;
+
+/// Matrices with this many rows or more are filtered in two parallel halves.
+const PAR_FILTER_ROWS: usize = 2048;
+/// Products with this many blocks or more are split into parallel tasks.
+const PAR_BLOCKS: usize = 16 * 1024;
+/// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
+/// (Frobenius norms) are lumped onto the diagonal in the preconditioner (see [`Csr::filtered`]).
+const DROP: f64 = 1e-3;
+
+/// Block CSR with 3x3 blocks and its own storage (the multigrid levels and the filtered copy of
+/// the fine matrix).
+#[derive(Debug, Clone, Default)]
+pub struct Csr {
+    pub(super) row_start: Vec<usize>,
+    pub(super) cols: Vec<u32>,
+    pub(super) vals: Vec<M3>,
+    /// Scratch of [`Csr::filtered`]: `|A_ii|_F^1/2` per row.
+    pub(super) dnorm: Vec<f64>,
+    /// Block columns: every entry of `cols` is below it (the products index `x` unchecked).
+    pub(super) ncols: usize,
+    /// Scratch of [`Csr::filtered`]: the second half's rows.
+    pub(super) spill: Spill,
+}
+
+/// Rows filtered in parallel before they are appended.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Spill {
+    pub(super) cols: Vec<u32>,
+    pub(super) vals: Vec<M3>,
+    pub(super) ends: Vec<usize>,
+}
+
+impl Csr {
+    /// `S A S + c (I - S)` per vertex, `c` = trace(A_ii)/3, reusing this matrix's storage.
+    ///
+    /// Negligible couplings (`|A_ij|_F <= DROP |A_ii|_F^1/2 |A_jj|_F^1/2`) that are symmetric
+    /// positive semidefinite blocks `B`, e.g. bending's distance-2 blocks `h^2 c I` next to
+    /// stretch springs, are lumped onto the diagonal: the change `[B, -B; -B, B]` is positive
+    /// semidefinite (the result stays SPD) and leaves rigid translations, the near-null space
+    /// the coarse levels are built on, untouched; the smoother and every coarse level get
+    /// sparser. (Spring-like negative blocks are kept: lumping them would remove stiffness.)
+    pub fn filtered(&mut self, a: &BlockCsr, filter: &[Filter]) {
+        let n = a.rows();
+        assert_eq!(filter.len(), n, "one filter per row");
+        self.ncols = n;
+        self.row_start.clear();
+        self.cols.clear();
+        self.vals.clear();
+        self.row_start.push(0);
+        self.dnorm.clear();
+        self.dnorm
+            .extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
+        let dnorm = &self.dnorm;
+        if n < PAR_FILTER_ROWS {
+            filter_rows(
+                a,
+                filter,
+                dnorm,
+                0..n,
+                &mut self.cols,
+                &mut self.vals,
+                &mut self.row_start,
+            );
+            return;
+        }
+        // Two halves in parallel (the second into scratch, appended after), row by row the
+        // same numbers as the serial pass.
+        let mid = n / 2;
+        let spill = &mut self.spill;
+        spill.cols.clear();
+        spill.vals.clear();
+        spill.ends.clear();
+        spill.ends.push(0);
+        rayon::join(
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    0..mid,
+                    &mut self.cols,
+                    &mut self.vals,
+                    &mut self.row_start,
+                )
+            },
+            || {
+                filter_rows(
+                    a,
+                    filter,
+                    dnorm,
+                    mid..n,
+                    &mut spill.cols,
+                    &mut spill.vals,
+                    &mut spill.ends,
+                )
+            },
+        );
+        let base = self.cols.len();
+        self.cols.extend_from_slice(&spill.cols);
+        self.vals.extend_from_slice(&spill.vals);
+        self.row_start
+            .extend(spill.ends[1..].iter().map(|e| base + e));
+    }
+
+    pub fn rows(&self) -> usize {
+        self.row_start.len().saturating_sub(1)
+    }
+
+    #[inline]
+    pub(super) fn row(&self, r: usize) -> (&[u32], &[M3]) {
+        let (s, e) = (self.row_start[r], self.row_start[r + 1]);
+        (&self.cols[s..e], &self.vals[s..e])
+    }
+
+    /// Row `r` times `x`. Safety: `x.len() >= self.ncols`.
+    #[inline(always)]
+    pub(super) unsafe fn row_times(&self, r: usize, x: &[V3]) -> V3 {
+        let (cols, vals) = self.row(r);
+        // SAFETY: every column is below `ncols <= x.len()`.
+        unsafe { row_dot(cols, vals, x) }
+    }
+
+    /// `y = A x`.
+    pub fn mul(&self, x: &[V3], y: &mut [V3]) {
+        assert!(
+            x.len() >= self.ncols && y.len() == self.rows(),
+            "mul: size mismatch"
+        );
+        let rows = |start: usize, y: &mut [V3]| {
+            for (k, yr) in y.iter_mut().enumerate() {
+                // SAFETY: `x.len() >= ncols` (asserted above).
+                *yr = unsafe { self.row_times(start + k, x) };
+            }
+        };
+        // Parallel by work, not rows: the restriction `P^T` has few rows but the fine level's
+        // blocks.
+        if self.cols.len() >= PAR_BLOCKS && y.len() >= 64 {
+            let chunk = y.len().div_ceil(8).max(32);
+            y.par_chunks_mut(chunk)
+                .enumerate()
+                .for_each(|(c, yc)| rows(c * chunk, yc));
+        } else {
+            rows(0, y);
+        }
+    }
+
+    /// Sorts every row by column (Galerkin products leave them in first-touch order), so that
+    /// the strictly lower and upper parts of a row are contiguous.
+    pub(super) fn sort_rows(&mut self) {
+        let mut row: Vec<(u32, M3)> = Vec::new();
+        for r in 0..self.rows() {
+            let (s, e) = (self.row_start[r], self.row_start[r + 1]);
+            if self.cols[s..e].is_sorted() {
+                continue;
+            }
+            row.clear();
+            row.extend(
+                self.cols[s..e]
+                    .iter()
+                    .copied()
+                    .zip(self.vals[s..e].iter().copied()),
+            );
+            row.sort_unstable_by_key(|&(c, _)| c);
+            for (k, (c, m)) in row.iter().enumerate() {
+                self.cols[s + k] = *c;
+                self.vals[s + k] = *m;
+            }
+        }
+    }
+
+    /// Value index of each row's diagonal block (rows sorted by column).
+    pub(super) fn diagonal_slots(&self, level: usize) -> Result<Vec<usize>, MultigridError> {
+        (0..self.rows())
+            .map(|r| {
+                let s = self.row_start[r];
+                self.cols[s..self.row_start[r + 1]]
+                    .binary_search(&(r as u32))
+                    .map(|k| s + k)
+                    .map_err(|_| MultigridError::MissingDiagonal { level, row: r })
+            })
+            .collect()
+    }
+
+    pub(super) fn diagonal_blocks(&self, level: usize) -> Result<Vec<M3>, MultigridError> {
+        (0..self.rows())
+            .map(|r| {
+                let (cols, vals) = self.row(r);
+                cols.iter()
+                    .position(|&c| c as usize == r)
+                    .map(|k| vals[k])
+                    .ok_or(MultigridError::MissingDiagonal { level, row: r })
+            })
+            .collect()
+    }
+
+    /// Transpose of an `rows x ncols` block matrix (blocks transposed too).
+    pub(super) fn transpose(&self, ncols: usize) -> Csr {
+        let mut count = vec![0usize; ncols + 1];
+        for &c in &self.cols {
+            count[c as usize + 1] += 1;
+        }
+        for k in 0..ncols {
+            count[k + 1] += count[k];
+        }
+        let mut next = count.clone();
+        let mut cols = vec![0u32; self.cols.len()];
+        let mut vals = vec![M3::ZERO; self.cols.len()];
+        for r in 0..self.rows() {
+            let (rc, rv) = self.row(r);
+            for (&c, &m) in rc.iter().zip(rv) {
+                let dst = next[c as usize];
+                next[c as usize] += 1;
+                cols[dst] = r as u32;
+                vals[dst] = m.transpose();
+            }
+        }
+        Csr {
+            row_start: count,
+            cols,
+            vals,
+            dnorm: Vec::new(),
+            ncols: self.rows(),
+            spill: Spill::default(),
+        }
+    }
+
+    /// `self * other` (Gustavson), `other` having `ncols` block columns.
+    pub(super) fn matmul(&self, other: &Csr, ncols: usize) -> Csr {
+        let rows = self.rows();
+        let chunk = rows
+            .div_ceil(rayon::current_num_threads().max(1) * 4)
+            .max(64);
+        let parts: Vec<(Vec<usize>, Vec<u32>, Vec<M3>)> = (0..rows)
+            .step_by(chunk)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|start| {
+                let end = (start + chunk).min(rows);
+                let mut marker = vec![usize::MAX; ncols];
+                let mut lens = Vec::with_capacity(end - start);
+                let mut cols = Vec::new();
+                let mut vals: Vec<M3> = Vec::new();
+                for r in start..end {
+                    let row_begin = cols.len();
+                    let (ac, av) = self.row(r);
+                    for (&k, &a) in ac.iter().zip(av) {
+                        let (bc, bv) = other.row(k as usize);
+                        for (&j, &b) in bc.iter().zip(bv) {
+                            let slot = marker[j as usize];
+                            if slot != usize::MAX && slot >= row_begin {
+                                vals[slot] += a * b;
+                            } else {
+                                marker[j as usize] = cols.len();
+                                cols.push(j);
+                                vals.push(a * b);
+                            }
+                        }
+                    }
+                    lens.push(cols.len() - row_begin);
+                }
+                (lens, cols, vals)
+            })
+            .collect();
+        let mut out = Csr {
+            row_start: Vec::with_capacity(rows + 1),
+            cols: Vec::new(),
+            vals: Vec::new(),
+            dnorm: Vec::new(),
+            ncols,
+            spill: Spill::default(),
+        };
+        out.row_start.push(0);
+        for (lens, cols, vals) in parts {
+            for l in lens {
+                let last = *out.row_start.last().unwrap_or(&0);
+                out.row_start.push(last + l);
+            }
+            out.cols.extend(cols);
+            out.vals.extend(vals);
+        }
+        out
+    }
+}
+
+/// Rows `rows` of [`Csr::filtered`], appended to `cols` and `vals`, each row's end (relative to
+/// `ends`' first entry's storage) pushed to `ends`.
+pub(super) fn filter_rows(
+    a: &BlockCsr,
+    filter: &[Filter],
+    dnorm: &[f64],
+    rows: std::ops::Range<usize>,
+    out_cols: &mut Vec<u32>,
+    out_vals: &mut Vec<M3>,
+    ends: &mut Vec<usize>,
+) {
+    let drop2 = DROP * DROP;
+    for i in rows {
+        let fi = &filter[i];
+        let (cols, vals) = a.row(i);
+        let si = fi.matrix();
+        let mut diag = usize::MAX;
+        let mut lumped = Mat3::ZERO;
+        for (&j, &blk) in cols.iter().zip(vals) {
+            let fj = &filter[j as usize];
+            let mut m = match (fi, fj) {
+                (Filter::Free, Filter::Free) => blk,
+                _ => si * blk * fj.matrix(),
+            };
+            if j as usize == i {
+                if !matches!(fi, Filter::Free) {
+                    let c = (blk.x_axis.x + blk.y_axis.y + blk.z_axis.z) / 3.0;
+                    m += (Mat3::IDENTITY - si) * c;
+                }
+                diag = out_cols.len();
+            } else {
+                let scale = dnorm[i] * dnorm[j as usize];
+                if frob2_f64(&m) <= drop2 * scale * scale && symmetric_psd(&m) {
+                    lumped += m;
+                    continue;
+                }
+            }
+            out_cols.push(j);
+            out_vals.push(single(&m));
+        }
+        if diag != usize::MAX {
+            out_vals[diag] += single(&lumped);
+        }
+        ends.push(out_cols.len());
+    }
+}
+
+/// `sum_k vals[k] x[cols[k]]`: one (partial) row times a vector.
+///
+/// Safety: every column in `cols` is below `x.len()`.
+#[inline(always)]
+pub(super) unsafe fn row_dot(cols: &[u32], vals: &[M3], x: &[V3]) -> V3 {
+    // SAFETY: forwarded contract (offset 0).
+    unsafe { row_dot_at(cols, vals, x, 0) }
+}
+
+/// [`row_dot`] with `x` holding the unknowns from index `offset` on. Unchecked indexing: the
+/// bounds checks cost a third of the multigrid cycle's instructions.
+///
+/// Safety: every column `j` in `cols` satisfies `offset <= j < offset + x.len()`.
+#[inline(always)]
+pub(super) unsafe fn row_dot_at(cols: &[u32], vals: &[M3], x: &[V3], offset: usize) -> V3 {
+    let mut acc = V3::ZERO;
+    for (&j, m) in cols.iter().zip(vals) {
+        debug_assert!(j as usize >= offset && (j as usize - offset) < x.len());
+        // SAFETY: in bounds by the contract.
+        acc += *m * unsafe { *x.get_unchecked(j as usize - offset) };
+    }
+    acc
+}
+
+/// Whether a block is exactly symmetric and positive semidefinite (all principal minors `>= 0`).
+pub(super) fn symmetric_psd(m: &Mat3) -> bool {
+    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+    // Column-major: m[r][c] = col(c)[r].
+    if a.y != b.x || a.z != c.x || b.z != c.y {
+        return false;
+    }
+    let (d0, d1, d2) = (a.x, b.y, c.z);
+    d0 >= 0.0
+        && d1 >= 0.0
+        && d2 >= 0.0
+        && d0 * d1 - a.y * a.y >= 0.0
+        && d0 * d2 - a.z * a.z >= 0.0
+        && d1 * d2 - b.z * b.z >= 0.0
+        && m.determinant() >= 0.0
+}
+
+/// A 3x3 block in the preconditioner's single precision.
+#[inline]
+pub(super) fn single(m: &Mat3) -> M3 {
+    M3::from(m.as_mat3())
+}
+
+pub(super) fn frob2_f64(m: &Mat3) -> f64 {
+    m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()
+}
+
+pub(super) fn frob2(m: &M3) -> f32 {
+    m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::dense::Dense;
+    use super::*;
+    use crate::linalg::PatternBuilder;
+    use crate::{Mat3, Vec3};
+
+    /// The two-halves filtering of a large matrix is the serial one, block for block.
+    #[test]
+    fn parallel_filtering_is_the_serial_one() {
+        let n = PAR_FILTER_ROWS + 301;
+        let mut p = PatternBuilder::new();
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                p.couple(i, (i + d) % n as u32);
+            }
+        }
+        let mut a = p.build(n);
+        for i in 0..n as u32 {
+            for d in [1, 2, 50] {
+                let j = (i + d) % n as u32;
+                let t = f64::from(i) * 0.37 + f64::from(d);
+                let dir = Vec3::new(t.sin(), t.cos(), 0.3).normalize();
+                // Weak distance-2 couplings get lumped, the others stay.
+                let k = if d == 2 { 1e-6 } else { 1.0 };
+                let blk = Mat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z) * k;
+                a.add(i, i, blk);
+                a.add(j, j, blk);
+                a.add(i, j, -blk);
+                a.add(j, i, -blk);
+            }
+        }
+        a.add_diagonal(&vec![1e-2; n]);
+        let filter: Vec<Filter> = (0..n)
+            .map(|i| match i % 7 {
+                0 => Filter::Fixed,
+                3 => Filter::Direction(Vec3::new(0.6, 0.0, 0.8)),
+                _ => Filter::Free,
+            })
+            .collect();
+        let mut par = Csr::default();
+        par.filtered(&a, &filter);
+        let mut dnorm = Vec::new();
+        dnorm.extend((0..n).map(|i| frob2_f64(&a.diagonal(i)).sqrt().sqrt()));
+        let (mut cols, mut vals, mut ends) = (Vec::new(), Vec::new(), vec![0]);
+        filter_rows(&a, &filter, &dnorm, 0..n, &mut cols, &mut vals, &mut ends);
+        assert_eq!(par.row_start, ends);
+        assert_eq!(par.cols, cols);
+        assert_eq!(par.vals, vals);
+        assert!(par.cols.len() < a.nnz_blocks(), "some blocks lumped");
+    }
+
+    /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
+    /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
+    /// matrix keeps its action on translations, and stays SPD (Cholesky of the dense copy).
+    #[test]
+    fn weak_positive_couplings_are_lumped_and_translations_kept() {
+        let mut p = PatternBuilder::new();
+        for (i, j) in [(0, 1), (1, 2), (0, 2), (0, 3)] {
+            p.couple(i, j);
+        }
+        let mut a = p.build(4);
+        let spring = |a: &mut BlockCsr, i: u32, j: u32, k: Mat3| {
+            a.add(i, i, k);
+            a.add(j, j, k);
+            a.add(i, j, -k);
+            a.add(j, i, -k);
+        };
+        let d = Vec3::new(1.0, 0.2, -0.1).normalize();
+        let k = Mat3::from_cols(d * d.x, d * d.y, d * d.z) + Mat3::IDENTITY * 0.1;
+        spring(&mut a, 0, 1, k);
+        spring(&mut a, 1, 2, k);
+        spring(&mut a, 0, 3, k * 1e-5);
+        // Bending-like: energy c |x0 - 2 x1 + x2|^2 / 2 gives +c on the (0, 2) blocks.
+        let c = 1e-5;
+        let w = [1.0, -2.0, 1.0];
+        for (ia, wa) in w.iter().enumerate() {
+            for (ib, wb) in w.iter().enumerate() {
+                a.add(ia as u32, ib as u32, Mat3::IDENTITY * (c * wa * wb));
+            }
+        }
+        a.add_diagonal(&[1e-3; 4]);
+        let mut f = Csr::default();
+        f.filtered(&a, &[Filter::Free; 4]);
+        let cols: Vec<Vec<u32>> = (0..4).map(|r| f.row(r).0.to_vec()).collect();
+        assert_eq!(
+            cols[0],
+            vec![0, 1, 3],
+            "(0, 2) lumped, weak spring (0, 3) kept"
+        );
+        assert_eq!(cols[2], vec![1, 2]);
+        // Same product with every translation.
+        for t in [Vec3::X, Vec3::Y, Vec3::new(0.3, -1.0, 2.0)] {
+            let (mut y0, mut y1) = (vec![Vec3::ZERO; 4], vec![V3::ZERO; 4]);
+            a.mul(&[t; 4], &mut y0);
+            f.mul(&[t.as_vec3a(); 4], &mut y1);
+            // Single precision: a few ulps of the O(1) blocks. Dropping the lumped coupling
+            // instead would be off by c |t| >= 1e-5.
+            for (u, v) in y0.iter().zip(&y1) {
+                assert!((*u - v.as_dvec3()).length() <= 1e-6, "{u} vs {v}");
+            }
+        }
+        assert!(Dense::factor(&f).is_ok());
+    }
+}
