@@ -57,7 +57,6 @@ const BEING_REMOVED: &[&[&str]] = &[
     &["garment/sew.rs", "scene/build.rs", "scene/mod.rs"],
     &["mesh/dae.rs", "mesh/mod.rs", "mesh/obj.rs", "mesh/stl.rs"],
     &["ros/msg/mod.rs", "ros/msg/schema.rs"],
-    &["ros/node/outputs.rs", "ros/node/sim_loop.rs"],
     &[
         "study/analysis.rs",
         "study/mod.rs",
