@@ -16,9 +16,14 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
     bare.garments.clear();
     let (mut sim, driver) = bare.build_with_robot().unwrap();
     let mut driver = driver.unwrap();
-    let report = dress(&mut sim, &scene, Some(&mut driver))
-        .unwrap()
-        .remove(0);
+    let report = dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        Some(&mut driver),
+    )
+    .unwrap()
+    .remove(0);
     assert!(report.max_gap < 1e-3, "gap {}", report.max_gap);
     assert_eq!(
         report.welded_vertices,
@@ -100,7 +105,13 @@ fn shirt_and_sleeve_are_sewn_together_as_two_garments() {
     bare.garments.clear();
     let (mut sim, driver) = bare.build_with_robot().unwrap();
     let mut driver = driver.unwrap();
-    let reports = dress(&mut sim, &scene, Some(&mut driver)).unwrap();
+    let reports = dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        Some(&mut driver),
+    )
+    .unwrap();
     assert_eq!(reports.len(), 2);
     let total: usize = reports.iter().map(|r| r.welded_vertices).sum();
     assert_eq!(sim.cloth.len(), total);

@@ -7,12 +7,14 @@
 mod damping;
 mod gravity;
 pub(crate) mod pair;
+pub mod plan;
 mod springs;
 mod stencils;
 mod wind;
 
 pub use damping::{AirDrag, SpringDamping, VelocityDiffusion};
 pub use gravity::Gravity;
+pub use plan::{EffectPlan, Elements, Lattice, Term, WindPlan};
 pub use springs::Springs;
 pub use stencils::{Bending, StencilSet, Twist};
 pub use wind::{Gust, Wind, WindKey};
