@@ -50,19 +50,12 @@ const KNOWN_CYCLES: &[&[&str]] = &[
     ],
 ];
 
-/// Cycles outside the core that this branch removes, one commit at a time (each commit stays
-/// green); empty at the branch's end.
-const BEING_REMOVED: &[&[&str]] = &[
-    &["mesh/dae.rs", "mesh/mod.rs", "mesh/obj.rs", "mesh/stl.rs"],
-    &["ros/msg/mod.rs", "ros/msg/schema.rs"],
-    &[
-        "study/analysis.rs",
-        "study/mod.rs",
-        "study/plots.rs",
-        "study/reference.rs",
-        "study/report.rs",
-    ],
-];
+/// Cycles outside the core left to another branch of issue 15: `mesh` belongs to the branch
+/// that types its errors (mesh/mod.rs defines `MeshError` and `TriMeshData`, which stl, obj and
+/// dae import, and dispatches to their parsers; the fix is those types in their own file). Empty
+/// this list when that branch is merged.
+const LEFT_TO_ANOTHER_BRANCH: &[&[&str]] =
+    &[&["mesh/dae.rs", "mesh/mod.rs", "mesh/obj.rs", "mesh/stl.rs"]];
 
 /// Module folders whose internal cycles may be listed in `KNOWN_CYCLES`.
 const CORE_WITH_KNOWN_CYCLES: &[&str] = &["effects/", "integrate/", "collide/", "sim/"];
@@ -1095,7 +1088,7 @@ fn src_has_no_import_cycles() {
     );
     let known: Vec<BTreeSet<&str>> = KNOWN_CYCLES
         .iter()
-        .chain(BEING_REMOVED)
+        .chain(LEFT_TO_ANOTHER_BRANCH)
         .map(|c| c.iter().copied().collect())
         .collect();
     let mut tolerated = String::new();

@@ -102,6 +102,11 @@ pub enum GarmentError {
         #[source]
         source: Box<DivergenceError>,
     },
+    #[error("garments '{garments}': sewing stopped by a signal")]
+    Cancelled {
+        /// The garments being sewn, comma separated.
+        garments: String,
+    },
     #[error("garment '{garment}': seam '{seam}' still has a {:.2} mm gap after {time:.2} s (tolerance {:.2} mm)", gap * 1e3, tolerance * 1e3)]
     SeamOpen {
         garment: String,

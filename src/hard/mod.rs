@@ -4,8 +4,12 @@
 //! so the committed summary (`docs/hard_cases.md`) is what the tests check.
 
 mod cases;
+mod edge;
+mod hanging;
+mod motion;
 mod report;
 mod runner;
+mod setup;
 
 pub use cases::{catalogue, CaseFn};
 pub use report::markdown;
