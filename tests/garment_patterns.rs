@@ -348,6 +348,27 @@ fn sewing_in_free_space_welds_and_a_weak_seam_fails_naming_it() {
     let weak =
         two_panel_scene("{ stiffness: 0.001, close_time: 0.1, tolerance: 0.001, max_time: 0.3 }");
     let scene = Scene::from_yaml(&weak, "weak.yaml").unwrap();
-    let e = scene.build().err().expect("sewing fails").to_string();
-    assert!(e.contains("seam 'middle'") && e.contains("gap"), "{e}");
+    let e = scene.build().err().expect("sewing fails");
+    let Some(GarmentError::SeamOpen {
+        garment,
+        seam,
+        gap,
+        tolerance,
+        ..
+    }) = std::error::Error::source(&e).and_then(|c| c.downcast_ref::<GarmentError>())
+    else {
+        panic!("not an open seam: {e:?}");
+    };
+    assert_eq!((garment.as_str(), seam.as_str()), ("test", "middle"));
+    assert!(gap > tolerance);
+    let mut chain = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        chain += &format!(": {c}");
+        cause = c.source();
+    }
+    assert!(
+        chain.contains("garments") && chain.contains("seam 'middle'") && chain.contains("gap"),
+        "{chain}"
+    );
 }

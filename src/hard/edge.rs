@@ -46,7 +46,7 @@ pub(super) fn degenerate_mesh(res: Resolution) -> Result<Case, HardError> {
     let z = 0.5;
     let positions: Vec<Vec3> = uv.iter().map(|p| Vec3::new(p.x, p.y, z)).collect();
     let panel =
-        Panel::from_triangles("mesh", uv, positions, tris).map_err(|message| HardError::Build {
+        Panel::from_triangles("mesh", uv, positions, tris).map_err(|message| HardError::Panel {
             case: name,
             message,
         })?;

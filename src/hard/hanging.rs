@@ -129,10 +129,7 @@ fn stiff_explicit(name: &'static str, res: Resolution, ratio: f64) -> Result<Cas
     let bounds = probe.effects().stiffness(&probe.cloth.mass);
     let omega = (!bounds.is_empty())
         .then(|| bounds.iter().map(|b| b.omega_sq).sum::<f64>().sqrt())
-        .ok_or_else(|| HardError::Build {
-            case: name,
-            message: "no elastic effect to take the stability limit from".into(),
-        })?;
+        .ok_or(HardError::NoElasticEffect { case: name })?;
     h.dt = ratio / omega;
     let description = format!(
         "as stiff_implicit at {}x{} with symplectic Euler at h*omega_bound = {ratio} (limit 2), \

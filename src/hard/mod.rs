@@ -96,13 +96,17 @@ pub struct Case {
 
 /// A case that could not be built (a bundled file missing, a scene the parser rejects).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum HardError {
-    #[error("hard case {case}: {source}")]
+    #[error("hard case {case}")]
     Scene {
         case: &'static str,
         #[source]
         source: crate::scene::SceneError,
     },
-    #[error("hard case {case}: {message}")]
-    Build { case: &'static str, message: String },
+    /// The case's hand-made panel was rejected by the cloth (its message).
+    #[error("hard case {case}: panel rejected: {message}")]
+    Panel { case: &'static str, message: String },
+    #[error("hard case {case}: no elastic effect to take the stability limit from")]
+    NoElasticEffect { case: &'static str },
 }

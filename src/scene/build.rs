@@ -120,8 +120,12 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         sim.set_collision(stage);
     }
     if !scene.garments.is_empty() {
-        crate::garment::dress(&mut sim, &scene.garments, &plan, driver.as_mut())
-            .map_err(|e| invalid(scene, "garments".into(), e.to_string()))?;
+        crate::garment::dress(&mut sim, &scene.garments, &plan, driver.as_mut()).map_err(
+            |source| SceneError::Garment {
+                origin: scene.name.clone(),
+                source: Box::new(source),
+            },
+        )?;
     }
     Ok((sim, driver))
 }

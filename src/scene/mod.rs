@@ -376,6 +376,13 @@ pub enum SceneError {
         key: String,
         reason: String,
     },
+    /// The scene's garments could not be dressed (key `garments`).
+    #[error("{origin}: garments")]
+    Garment {
+        origin: String,
+        #[source]
+        source: Box<crate::garment::GarmentError>,
+    },
 }
 
 impl Scene {
