@@ -17,7 +17,7 @@ use drape::cloth::Kinematic;
 use drape::robot::JointInput;
 use drape::ros::msg::{DiagnosticArray, Header, JointState, PointCloud2, Time};
 use drape::ros::node::{
-    context, real_time_preview, run_node, sim_loop, ClockMode, Command, LoopConfig, Network,
+    context, real_time_preview, run_node, thread, ClockMode, Command, LoopConfig, Network,
     NodeParams, Output, SimLoop, WallClock,
 };
 use drape::scene::Scene;
@@ -272,7 +272,7 @@ fn direct_link(mut scene: Scene, solver: Solver) -> Link {
     let (tx, out) = mpsc::channel();
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let sim = std::thread::spawn(move || sim_loop::run(core, ClockMode::Wall, wall, rx, tx, &flag));
+    let sim = std::thread::spawn(move || thread::run(core, ClockMode::Wall, wall, rx, tx, &flag));
     Link::Direct {
         stop,
         sim,

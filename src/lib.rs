@@ -2,7 +2,9 @@
 //!
 //! The core (`cloth`, `effects`, `integrate`, `collide`, `scene`, `sim`, `mesh`, `robot`)
 //! is pure Rust with no ROS types; `ros` (feature `ros`, on by default) turns cloth
-//! into ROS 2 messages, writes rosbag2 MCAP files and runs the live node.
+//! into ROS 2 messages, writes rosbag2 MCAP files and runs the live node. `hard` (the hard-case
+//! catalogue) and `study` (the accuracy/cost study) are tools around the simulator, behind the
+//! feature `tools` (on by default); `--no-default-features` builds the simulator alone.
 //! See `docs/DESIGN.md` for the layering and the order of one step.
 
 // Numeric loops index several parallel arrays at once; iterator zips would hide the math.
@@ -12,6 +14,7 @@ pub mod cloth;
 pub mod collide;
 pub mod effects;
 pub mod garment;
+#[cfg(feature = "tools")]
 pub mod hard;
 pub mod integrate;
 pub mod linalg;
@@ -23,6 +26,7 @@ pub mod robot;
 pub mod ros;
 pub mod scene;
 pub mod sim;
+#[cfg(feature = "tools")]
 pub mod study;
 
 /// All simulation state is double precision: convergence-order and energy tests

@@ -157,7 +157,13 @@ fn shirt_rest(seconds: f64) -> Rest {
     let mut bare = scene.clone();
     bare.garments.clear();
     let (mut sim, mut driver) = bare.build_with_robot().unwrap_or_else(|e| panic!("{e}"));
-    dress(&mut sim, &scene, driver.as_mut()).unwrap_or_else(|e| panic!("{e}"));
+    dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        driver.as_mut(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let mut driver = driver.unwrap_or_else(|| panic!("shirt scene has a robot"));
     let steps = (seconds / sim.settings.dt).round() as usize;
     let tail = (1.0 / sim.settings.dt).round() as usize;

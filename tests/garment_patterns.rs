@@ -7,7 +7,7 @@ use drape::garment::placement::place;
 use drape::garment::sew::assemble;
 use drape::garment::weld::weld;
 use drape::garment::{mesh_garment, GarmentError, GarmentSpec, PlacementSpec, WrapSpec};
-use drape::scene::Scene;
+use drape::scene::{Scene, SceneError};
 use drape::Vec3;
 use glam::DVec2;
 
@@ -348,6 +348,30 @@ fn sewing_in_free_space_welds_and_a_weak_seam_fails_naming_it() {
     let weak =
         two_panel_scene("{ stiffness: 0.001, close_time: 0.1, tolerance: 0.001, max_time: 0.3 }");
     let scene = Scene::from_yaml(&weak, "weak.yaml").unwrap();
-    let e = scene.build().err().expect("sewing fails").to_string();
-    assert!(e.contains("seam 'middle'") && e.contains("gap"), "{e}");
+    let e = scene.build().err().expect("sewing fails");
+    let SceneError::Garment { source, .. } = &e else {
+        panic!("not a garment error: {e:?}");
+    };
+    let GarmentError::SeamOpen {
+        garment,
+        seam,
+        gap,
+        tolerance,
+        ..
+    } = &**source
+    else {
+        panic!("not an open seam: {source:?}");
+    };
+    assert_eq!((garment.as_str(), seam.as_str()), ("test", "middle"));
+    assert!(gap > tolerance);
+    let mut chain = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        chain += &format!(": {c}");
+        cause = c.source();
+    }
+    assert!(
+        chain.contains("garments") && chain.contains("seam 'middle'") && chain.contains("gap"),
+        "{chain}"
+    );
 }

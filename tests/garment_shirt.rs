@@ -22,7 +22,13 @@ fn dressed(scene: &Scene) -> (Simulation, RobotDriver, SewReport) {
     let mut bare = scene.clone();
     bare.garments.clear();
     let (mut sim, mut driver) = bare.build_with_robot().unwrap();
-    let mut reports = dress(&mut sim, scene, driver.as_mut()).unwrap();
+    let mut reports = dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        driver.as_mut(),
+    )
+    .unwrap();
     (sim, driver.unwrap(), reports.remove(0))
 }
 

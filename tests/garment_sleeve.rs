@@ -2,9 +2,9 @@
 //! the raised left upper arm, which then moves: the sleeve closes, welds into a tube, its
 //! shoulder end follows the arm link and the rest stays around the arm.
 
-use drape::garment::dress;
 use drape::garment::sew::body_penetration;
-use drape::scene::Scene;
+use drape::garment::{dress, GarmentError};
+use drape::scene::{Scene, SceneError};
 use drape::Vec3;
 use std::path::Path;
 
@@ -16,9 +16,14 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
     bare.garments.clear();
     let (mut sim, driver) = bare.build_with_robot().unwrap();
     let mut driver = driver.unwrap();
-    let report = dress(&mut sim, &scene, Some(&mut driver))
-        .unwrap()
-        .remove(0);
+    let report = dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        Some(&mut driver),
+    )
+    .unwrap()
+    .remove(0);
     assert!(report.max_gap < 1e-3, "gap {}", report.max_gap);
     assert_eq!(
         report.welded_vertices,
@@ -82,10 +87,28 @@ fn attachment_to_a_missing_link_is_a_clear_error() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sleeve.yaml");
     let mut scene = Scene::load(&path).unwrap();
     scene.garments[0].attach[0].link = "tentacle".into();
-    let e = scene.build().err().expect("build fails").to_string();
+    let e = scene.build().err().expect("build fails");
+    // The scene error names the key; its source names the garment, the attachment and the link.
+    let SceneError::Garment { source, .. } = &e else {
+        panic!("not a garment error: {e}");
+    };
     assert!(
-        e.contains("sleeve") && e.contains("attach[0]") && e.contains("'tentacle'"),
-        "{e}"
+        matches!(&**source, GarmentError::AttachLink { garment, index: 0, link }
+            if garment == "sleeve" && link == "tentacle"),
+        "{source:?}"
+    );
+    let mut chain = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        chain += &format!(": {c}");
+        cause = c.source();
+    }
+    assert!(
+        chain.contains("garments")
+            && chain.contains("sleeve")
+            && chain.contains("attach[0]")
+            && chain.contains("'tentacle'"),
+        "{chain}"
     );
 }
 
@@ -100,7 +123,13 @@ fn shirt_and_sleeve_are_sewn_together_as_two_garments() {
     bare.garments.clear();
     let (mut sim, driver) = bare.build_with_robot().unwrap();
     let mut driver = driver.unwrap();
-    let reports = dress(&mut sim, &scene, Some(&mut driver)).unwrap();
+    let reports = dress(
+        &mut sim,
+        &scene.garments,
+        &scene.effect_plan(),
+        Some(&mut driver),
+    )
+    .unwrap();
     assert_eq!(reports.len(), 2);
     let total: usize = reports.iter().map(|r| r.welded_vertices).sum();
     assert_eq!(sim.cloth.len(), total);

@@ -356,3 +356,71 @@ fn live_wind_changes_the_flag_and_survives_reset() {
         "{out:?}"
     );
 }
+
+fn towel(res: usize) -> Scene {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot_towel.yaml");
+    let mut scene = Scene::load(path.as_ref()).expect("robot_towel scene");
+    scene.cloths[0].grid.resolution = [res, res];
+    scene
+}
+
+fn shoulder(s: f64) -> Command {
+    Command::Joints {
+        stamp_ns: 0,
+        input: JointInput {
+            names: vec!["right_shoulder_pitch".into()],
+            positions: vec![s],
+            velocities: None,
+        },
+    }
+}
+
+fn frame_count(out: &[Output]) -> usize {
+    out.iter()
+        .filter(|o| matches!(o, Output::Frame { .. }))
+        .count()
+}
+
+/// Publish instants fall on even steps (T0, T0 + 2 dt, ...). A changed command before an
+/// odd step publishes right after that step instead of a step later; an unchanged one does
+/// not; and the number of frames per second stays the rate.
+#[test]
+fn a_step_reaching_a_new_command_publishes_a_step_early() {
+    let mut l = SimLoop::new(towel(6), LoopConfig::default(), T0).expect("loop");
+    let dt = l.simulation().settings.dt;
+    let mut out = Vec::new();
+    l.sync_clock(T0);
+    l.advance_to(T0, &mut out);
+    assert_eq!(frame_count(&out), 1);
+    // The scene's own pose, re-sent: nothing new to show, no early frame.
+    let q = l.driver().expect("robot").joint_positions().clone();
+    let j = l
+        .driver()
+        .unwrap()
+        .robot()
+        .joint_index("right_shoulder_pitch");
+    let s0 = q.positions[j.expect("shoulder")];
+    l.handle(shoulder(s0), T0 + 0.5 * dt, &mut out);
+    l.advance_to(T0 + dt, &mut out);
+    assert_eq!(frame_count(&out), 1, "unchanged command published early");
+    l.advance_to(T0 + 2.0 * dt, &mut out);
+    assert_eq!(frame_count(&out), 2);
+    // A new pose before the odd step at T0 + 3 dt: out right after it.
+    l.handle(shoulder(s0 + 0.05), T0 + 2.5 * dt, &mut out);
+    l.advance_to(T0 + 3.0 * dt, &mut out);
+    assert_eq!(
+        frame_count(&out),
+        3,
+        "new pose not published after the step reaching it"
+    );
+    // The instant at T0 + 4 dt was taken: none there; the grid resumes at T0 + 6 dt.
+    l.advance_to(T0 + 4.0 * dt, &mut out);
+    assert_eq!(frame_count(&out), 3);
+    let mut t = T0 + 4.0 * dt;
+    while t < T0 + 1.0 - 1e-9 {
+        t += 0.5 * dt;
+        l.advance_to(t, &mut out);
+    }
+    // Instants T0, T0 + 1/30, ..., T0 + 1: 31 frames, one of them early.
+    assert_eq!(frame_count(&out), 31);
+}

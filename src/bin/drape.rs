@@ -42,6 +42,7 @@ enum Command {
         quiet: bool,
     },
     /// Measure what accuracy costs in time: sweep integrators, steps, CG settings and resolutions.
+    #[cfg(feature = "tools")]
     Study {
         /// Small sweep (under 2 minutes) instead of the full study.
         #[arg(long)]
@@ -61,6 +62,7 @@ enum Command {
         ros_args: Vec<String>,
     },
     /// Run the hard-case catalogue and write its Markdown summary of worst values.
+    #[cfg(feature = "tools")]
     HardCases {
         /// Full resolution and duration (minutes) instead of the CI variants (seconds).
         #[arg(long)]
@@ -101,9 +103,11 @@ fn run(cli: Cli) -> Result<()> {
             joints,
             quiet,
         } => record(scene, out, duration, distro, frame_id, joints, quiet),
+        #[cfg(feature = "tools")]
         Command::Study { quick, out } => study(quick, out),
         #[cfg(feature = "ros")]
         Command::Node { params, ros_args } => node(params, ros_args),
+        #[cfg(feature = "tools")]
         Command::HardCases { full, out } => hard_cases(full, out),
         Command::Check { scene } => {
             let s = drape::scene::Scene::load(&scene)?;
@@ -124,6 +128,7 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 /// Runs every hard case, writes the summary, and fails if any case failed its criteria.
+#[cfg(feature = "tools")]
 fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
     use drape::hard::{catalogue, markdown, run_case, Resolution};
     let res = if full {
@@ -165,6 +170,7 @@ fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "tools")]
 fn study(quick: bool, out: PathBuf) -> Result<()> {
     use anyhow::Context as _;
     use drape::study::{run_study, Plan};

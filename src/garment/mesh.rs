@@ -4,9 +4,9 @@
 //! refinement may not split them) so that both sides of a seam keep matching vertex counts.
 //! Rest (u, v) coordinates are the pattern coordinates rotated into the grain frame.
 
+use super::error::{GarmentError, MeshProblem};
 use super::pattern::{outline, polyline_length, stretch_edges, stretch_points};
 use super::spec::{GarmentSpec, PanelSpec, SeamSide};
-use super::GarmentError;
 use glam::DVec2;
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
@@ -143,17 +143,17 @@ pub fn mesh_panel(
     loop_pts: &[DVec2],
     edge_length: f64,
 ) -> Result<PanelMesh, GarmentError> {
-    let fail = |reason: String| GarmentError::Mesh {
+    let fail = |problem: MeshProblem| GarmentError::Mesh {
         panel: panel.name.clone(),
-        reason,
+        problem,
     };
     let nb = loop_pts.len();
     let verts: Vec<Point2<f64>> = loop_pts.iter().map(|p| Point2::new(p.x, p.y)).collect();
     let edges: Vec<[usize; 2]> = (0..nb).map(|i| [i, (i + 1) % nb]).collect();
     let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::bulk_load_cdt(verts, edges)
-        .map_err(|e| fail(format!("triangulation failed: {e:?}")))?;
+        .map_err(|e| fail(MeshProblem::Triangulation(e)))?;
     if cdt.num_vertices() != nb {
-        return Err(fail("resampled boundary has coincident points".into()));
+        return Err(fail(MeshProblem::CoincidentBoundary));
     }
     let target_area = 3f64.sqrt() / 4.0 * edge_length * edge_length;
     let area = super::pattern::signed_area(loop_pts).abs();
@@ -167,9 +167,7 @@ pub fn mesh_panel(
             .with_max_additional_vertices(budget),
     );
     if !result.refinement_complete {
-        return Err(fail(
-            "refinement did not converge (outline too detailed for edge_length?)".into(),
-        ));
+        return Err(fail(MeshProblem::NoConvergence));
     }
     let excluded: std::collections::HashSet<_> = result.excluded_faces.iter().copied().collect();
     let mut map: Vec<Option<u32>> = vec![None; cdt.num_vertices()];
@@ -198,9 +196,10 @@ pub fn mesh_panel(
         .map(|t| min_angle_deg(t.map(|i| points[i as usize])))
         .fold(180.0, f64::min);
     if triangles.is_empty() || worst < MIN_ANGLE_DEG {
-        return Err(fail(format!(
-            "worst triangle angle {worst:.1} deg is below {MIN_ANGLE_DEG} deg (sharp outline corner?)"
-        )));
+        return Err(fail(MeshProblem::SharpAngle {
+            worst_deg: worst,
+            min_deg: MIN_ANGLE_DEG,
+        }));
     }
     let g = panel.grain.to_radians();
     let (warp, weft) = (DVec2::new(g.cos(), g.sin()), DVec2::new(-g.sin(), g.cos()));
@@ -264,9 +263,8 @@ pub fn mesh_garment(g: &GarmentSpec) -> Result<GarmentMesh, GarmentError> {
     let mut seams = Vec::with_capacity(g.seams.len());
     for (s, [a, b]) in g.seams.iter().zip(sides) {
         let (Some(a), Some(mut b)) = (a, b) else {
-            return Err(GarmentError::Seam {
+            return Err(GarmentError::NotResampled {
                 seam: s.name.clone(),
-                reason: "a side was not resampled".into(),
             });
         };
         if s.reversed {

@@ -2,8 +2,8 @@
 //! cannot be sewn or meshed), and seams must name existing panels, valid stretches and stretches
 //! of comparable length.
 
+use super::error::{GarmentError, OutlineProblem};
 use super::spec::{GarmentSpec, PanelSpec, SeamSide, SeamSpec};
-use super::GarmentError;
 use glam::DVec2;
 
 /// Largest accepted relative difference of the two sides of a seam: `|La - Lb| / max(La, Lb)`.
@@ -45,21 +45,24 @@ fn segments_intersect(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
 /// Checks one panel's outline: at least 3 finite points, no zero-length edge, no two
 /// non-adjacent edges touching, non-zero area.
 pub fn validate_outline(p: &PanelSpec) -> Result<(), GarmentError> {
-    let bad = |reason: String| GarmentError::Outline {
+    let bad = |problem: OutlineProblem| GarmentError::Outline {
         panel: p.name.clone(),
-        reason,
+        problem,
     };
     let pts = outline(p);
     let n = pts.len();
     if n < 3 {
-        return Err(bad(format!("needs at least 3 points, has {n}")));
+        return Err(bad(OutlineProblem::TooFewPoints { count: n }));
     }
     if let Some(i) = pts.iter().position(|q| !q.is_finite()) {
-        return Err(bad(format!("point {i} is not finite")));
+        return Err(bad(OutlineProblem::NotFinite { point: i }));
     }
     for i in 0..n {
         if (pts[(i + 1) % n] - pts[i]).length() <= 1e-9 {
-            return Err(bad(format!("points {i} and {} coincide", (i + 1) % n)));
+            return Err(bad(OutlineProblem::Coincident {
+                a: i,
+                b: (i + 1) % n,
+            }));
         }
     }
     for i in 0..n {
@@ -78,7 +81,7 @@ pub fn validate_outline(p: &PanelSpec) -> Result<(), GarmentError> {
         }
     }
     if signed_area(&pts).abs() < 1e-8 {
-        return Err(bad("encloses no area".into()));
+        return Err(bad(OutlineProblem::ZeroArea));
     }
     Ok(())
 }
@@ -112,23 +115,22 @@ pub fn polyline_length(pts: &[DVec2]) -> f64 {
 /// Validates every panel and seam of a garment.
 pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
     if g.panels.is_empty() {
-        return Err(GarmentError::Invalid {
+        return Err(GarmentError::NoPanels {
             garment: g.name.clone(),
-            reason: "has no panels".into(),
         });
     }
     if !(g.edge_length.is_finite() && g.edge_length > 0.0) {
-        return Err(GarmentError::Invalid {
+        return Err(GarmentError::EdgeLength {
             garment: g.name.clone(),
-            reason: format!("edge_length {} must be > 0", g.edge_length),
+            edge_length: g.edge_length,
         });
     }
     validate_parameters(g)?;
     for (k, p) in g.panels.iter().enumerate() {
         if g.panels[..k].iter().any(|q| q.name == p.name) {
-            return Err(GarmentError::Invalid {
+            return Err(GarmentError::DuplicatePanel {
                 garment: g.name.clone(),
-                reason: format!("two panels are named '{}'", p.name),
+                panel: p.name.clone(),
             });
         }
         validate_outline(p)?;
@@ -138,24 +140,25 @@ pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
         if triangles > MAX_TRIANGLES {
             return Err(GarmentError::Outline {
                 panel: p.name.clone(),
-                reason: format!(
-                    "would mesh into ~{triangles:.0} triangles at edge_length {} (limit {MAX_TRIANGLES})",
-                    g.edge_length
-                ),
+                problem: OutlineProblem::TooManyTriangles {
+                    triangles,
+                    edge_length: g.edge_length,
+                    limit: MAX_TRIANGLES as usize,
+                },
             });
         }
         let pose = &p.placement.pose;
         if pose.xyz.iter().chain(&pose.rpy).any(|v| !v.is_finite()) || !p.grain.is_finite() {
             return Err(GarmentError::Outline {
                 panel: p.name.clone(),
-                reason: "has a non-finite placement pose or grain".into(),
+                problem: OutlineProblem::NonFinitePlacement,
             });
         }
         if let Some(w) = &p.placement.wrap {
             if !(w.radius.is_finite() && w.radius > 0.0) {
                 return Err(GarmentError::Outline {
                     panel: p.name.clone(),
-                    reason: format!("wrap radius {} must be > 0", w.radius),
+                    problem: OutlineProblem::WrapRadius { radius: w.radius },
                 });
             }
         }
@@ -199,27 +202,26 @@ fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
     for (key, v, strictly) in checks {
         let ok = v.is_finite() && if strictly { v > 0.0 } else { v >= 0.0 };
         if !ok {
-            let want = if strictly { "> 0" } else { ">= 0" };
-            return Err(GarmentError::Invalid {
+            return Err(GarmentError::Value {
                 garment: g.name.clone(),
-                reason: format!("{key} = {v} must be finite and {want}"),
+                key,
+                value: v,
+                strictly,
             });
         }
     }
     if !(s.max_time.is_finite() && s.max_time > s.close_time) {
-        return Err(GarmentError::Invalid {
+        return Err(GarmentError::MaxTime {
             garment: g.name.clone(),
-            reason: format!(
-                "sewing.max_time = {} must be finite and > close_time ({})",
-                s.max_time, s.close_time
-            ),
+            max_time: s.max_time,
+            close_time: s.close_time,
         });
     }
     for (k, a) in g.attach.iter().enumerate() {
         if !(a.radius.is_finite() && a.radius > 0.0) || a.point.iter().any(|v| !v.is_finite()) {
-            return Err(GarmentError::Invalid {
+            return Err(GarmentError::AttachShape {
                 garment: g.name.clone(),
-                reason: format!("attach[{k}]: point must be finite and radius > 0"),
+                index: k,
             });
         }
     }
@@ -251,19 +253,18 @@ fn validate_seam(
             }
         }
         if side.from == side.to {
-            return Err(GarmentError::Seam {
+            return Err(GarmentError::EmptySeamSide {
                 seam: s.name.clone(),
-                reason: format!("stretch of panel '{}' is empty (from == to)", side.panel),
+                panel: side.panel.clone(),
             });
         }
         for e in stretch_edges(n, side) {
             if let Some(other) = &used[pi][e] {
-                return Err(GarmentError::Seam {
+                return Err(GarmentError::SeamOverlap {
                     seam: s.name.clone(),
-                    reason: format!(
-                        "edge {e} of panel '{}' is already sewn by seam '{other}'",
-                        side.panel
-                    ),
+                    panel: side.panel.clone(),
+                    edge: e,
+                    other: other.clone(),
                 });
             }
             used[pi][e] = Some(s.name.clone());
@@ -276,6 +277,7 @@ fn validate_seam(
             seam: s.name.clone(),
             a: lengths[0],
             b: lengths[1],
+            max_mismatch: MAX_SEAM_MISMATCH,
         });
     }
     Ok(())

@@ -1,19 +1,16 @@
 //! The sewing stage: panels placed around the body, seam springs closing along the schedule with
 //! gravity and wind off and collisions on, then the weld and the switch to normal simulation.
 
+use super::error::{GarmentError, MeshProblem, SharedStageError};
 use super::mesh::mesh_garment;
+use super::pattern;
 use super::placement::place;
 use super::seam::{gaps, SeamPairs, SeamSprings};
 use super::spec::{GarmentAttachSpec, GarmentSpec};
 use super::weld::{weld, Topology};
-use super::{pattern, GarmentError};
-use crate::cloth::topology::Spring;
-use crate::cloth::{Cloth, Material, Panel};
-use crate::effects::{
-    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, VelocityDiffusion,
-};
+use crate::cloth::{Cloth, Panel};
+use crate::effects::EffectPlan;
 use crate::robot::RobotDriver;
-use crate::scene::{EffectKind, Scene};
 use crate::sim::Simulation;
 use crate::Vec3;
 
@@ -51,7 +48,7 @@ pub fn assemble(g: &GarmentSpec) -> Result<(Cloth, Vec<SeamPairs>), GarmentError
         )
         .map_err(|reason| GarmentError::Mesh {
             panel: p.name.clone(),
-            reason,
+            problem: MeshProblem::Panel(reason),
         })?;
         first.push(cloth.x.len() as u32);
         cloth.add_panel(panel, g.material);
@@ -73,74 +70,6 @@ pub fn assemble(g: &GarmentSpec) -> Result<(Cloth, Vec<SeamPairs>), GarmentError
     Ok((cloth, seams))
 }
 
-/// The scene's effects over garments' topology (each spring, stencil and vertex with its own
-/// garment's material). `sewing` drops gravity and wind.
-pub fn effects(scene: &Scene, cloth: &Cloth, topo: &Topology, sewing: bool) -> EffectSet {
-    let mut set = EffectSet::new();
-    let per_edge = |f: fn(&Material) -> f64| -> (Vec<(u32, u32)>, Vec<f64>) {
-        topo.springs
-            .iter()
-            .zip(&topo.spring_material)
-            .filter(|(_, m)| f(m) > 0.0)
-            .map(|(s, m)| ((s.i, s.j), f(m)))
-            .unzip()
-    };
-    for kind in &scene.effects {
-        match kind {
-            EffectKind::Gravity if !sewing => {
-                set.push_gravity(Gravity::new(Vec3::from(scene.gravity), &cloth.mass))
-            }
-            EffectKind::Stretch => {
-                let (springs, k): (Vec<Spring>, Vec<f64>) = topo
-                    .springs
-                    .iter()
-                    .zip(&topo.spring_material)
-                    .filter(|(_, m)| m.stretch > 0.0)
-                    .map(|(s, m)| (*s, m.stretch))
-                    .unzip();
-                if !springs.is_empty() {
-                    set.push(Box::new(Springs::new(
-                        "stretch",
-                        springs,
-                        k,
-                        "garments.material.stretch".into(),
-                    )));
-                }
-            }
-            EffectKind::Bending if !topo.bending.is_empty() => set.push(Box::new(Bending::new(
-                topo.bending.clone(),
-                topo.bending_rigidity.clone(),
-                "garments.material.bend_warp".into(),
-            ))),
-            EffectKind::Wind if !sewing => {
-                if let Some(w) = &scene.wind {
-                    set.push(Box::new(w.effect(cloth.triangles.clone())));
-                }
-            }
-            EffectKind::Damping => {
-                let (pairs, kd) = per_edge(|m| m.damping.spring);
-                if !pairs.is_empty() {
-                    set.push(Box::new(SpringDamping::new(pairs, kd)));
-                }
-                let mut air = vec![0.0; cloth.len()];
-                for p in &cloth.pieces {
-                    air[p.vertices()].fill(p.material.damping.air);
-                }
-                if air.iter().any(|&a| a > 0.0) {
-                    set.push(Box::new(AirDrag::new(&air, &cloth.mass)));
-                }
-                let (pairs, k) = per_edge(|m| m.damping.diffusion);
-                if !pairs.is_empty() {
-                    set.push(Box::new(VelocityDiffusion::new(pairs, k)));
-                }
-            }
-            // Free meshes resist shear with their own edges; skip-one and twist need a lattice.
-            _ => {}
-        }
-    }
-    set
-}
-
 /// How one garment's sewing ended: simulated time (s), frame steps, largest gap per seam (m).
 pub type Sewn = (f64, usize, Vec<(String, f64)>);
 
@@ -155,13 +84,13 @@ pub fn sew(
     let mut steps = 0;
     let mut done: Vec<Option<Sewn>> = vec![None; garments.len()];
     loop {
-        sim.step().map_err(|e| GarmentError::Sewing {
-            garment: garments
+        sim.step().map_err(|source| GarmentError::SewingDiverged {
+            garments: garments
                 .iter()
                 .map(|g| g.0.name.as_str())
                 .collect::<Vec<_>>()
                 .join(", "),
-            reason: e.to_string(),
+            source,
         })?;
         steps += 1;
         let t = sim.time() - t0;
@@ -185,14 +114,12 @@ pub fn sew(
             if t >= spec.close_time && worst.1 < spec.tolerance {
                 done[k] = Some((t, steps, per_seam));
             } else if t >= spec.max_time {
-                return Err(GarmentError::Sewing {
+                return Err(GarmentError::SeamOpen {
                     garment: g.name.clone(),
-                    reason: format!(
-                        "seam '{}' still has a {:.2} mm gap after {t:.2} s (tolerance {:.2} mm)",
-                        worst.0,
-                        worst.1 * 1e3,
-                        spec.tolerance * 1e3
-                    ),
+                    seam: worst.0,
+                    gap: worst.1,
+                    time: t,
+                    tolerance: spec.tolerance,
                 });
             }
         }
@@ -202,20 +129,22 @@ pub fn sew(
     }
 }
 
-/// Dresses the scene's garments onto the body in `sim`: the garments are assembled and sewn
-/// together (each with its own schedule), each is welded into one piece, and the simulation then
-/// continues from t = 0 with the welded garments, at rest, under the scene's effects (gravity on).
-/// Scenes with garments hold no other cloth. Garment attachments bind to the robot's links through
-/// `driver` (required when a garment has any).
+/// Dresses `garments` onto the body in `sim`: the garments are assembled and sewn together (each
+/// with its own schedule) under `plan` without its loads (no gravity, no wind), each is welded
+/// into one piece, and the simulation then continues from t = 0 with the welded garments, at
+/// rest, under the whole `plan` (gravity on). A simulation with garments holds no other cloth.
+/// Garment attachments bind to the robot's links through `driver` (required when a garment has
+/// any).
 pub fn dress(
     sim: &mut Simulation,
-    scene: &Scene,
+    garments: &[GarmentSpec],
+    plan: &EffectPlan,
     mut driver: Option<&mut RobotDriver>,
 ) -> Result<Vec<SewReport>, GarmentError> {
     let mut all = Cloth::new();
     let mut parts = Vec::new();
     let mut sewing_springs = Vec::new();
-    for g in &scene.garments {
+    for g in garments {
         let (cloth, seams) = assemble(g)?;
         let off = all.len() as u32;
         let first_piece = all.pieces.len();
@@ -242,18 +171,17 @@ pub fn dress(
         parts.push((g, seams, first_piece..all.pieces.len()));
     }
     let topo = Topology::of_pieces(&all.pieces);
-    let mut set = effects(scene, &all, &topo, true);
+    let mut set = plan.without_loads().build(&all, &topo);
     for s in sewing_springs {
         set.push(Box::new(s));
     }
-    let stage_error = |e: crate::collide::StageError| GarmentError::Sewing {
-        garment: scene
-            .garments
+    let stage_error = |e: crate::collide::StageError| GarmentError::Stage {
+        garments: garments
             .iter()
             .map(|g| g.name.as_str())
             .collect::<Vec<_>>()
             .join(", "),
-        reason: e.to_string(),
+        source: SharedStageError(std::sync::Arc::new(e)),
     };
     sim.replace_cloth(all, set).map_err(stage_error)?;
     let sewn: Vec<(&GarmentSpec, Vec<SeamPairs>)> =
@@ -287,13 +215,10 @@ pub fn dress(
             .iter()
             .position(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
         {
-            return Err(GarmentError::Invalid {
+            return Err(GarmentError::WeldCollapse {
                 garment: g.name.clone(),
-                reason: format!(
-                    "welding collapses triangle {t}: a seam joins two vertices of one triangle \
-                     (seam too short for edge_length {})",
-                    g.edge_length
-                ),
+                triangle: t,
+                edge_length: g.edge_length,
             });
         }
         log::info!(
@@ -331,7 +256,7 @@ pub fn dress(
         }
     }
     done.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
-    let set = effects(scene, &done, &done_topo, false);
+    let set = plan.build(&done, &done_topo);
     sim.replace_cloth(done, set).map_err(stage_error)?;
     sim.restart_clock();
     Ok(reports)
@@ -362,36 +287,35 @@ fn attach(
     k: usize,
     a: &GarmentAttachSpec,
 ) -> Result<(), GarmentError> {
-    let bad = |reason: String| GarmentError::Invalid {
-        garment: g.name.clone(),
-        reason: format!("attach[{k}]: {reason}"),
-    };
     let Some(driver) = driver else {
-        return Err(bad("needs a robot".into()));
+        return Err(GarmentError::AttachNeedsRobot {
+            garment: g.name.clone(),
+            index: k,
+        });
     };
     let link = driver
         .robot()
         .link_index(&a.link)
-        .ok_or_else(|| bad(format!("the robot has no link named '{}'", a.link)))?;
+        .ok_or_else(|| GarmentError::AttachLink {
+            garment: g.name.clone(),
+            index: k,
+            link: a.link.clone(),
+        })?;
     let pose = driver.link_poses()[link];
-    let frame = match driver.frame_of(link) {
-        Some(f) => f,
-        None => {
-            let f = sim.frames.add(&format!("robot:{}", a.link), pose);
-            driver.bind_frame(link, f);
-            f
-        }
-    };
+    let frame = driver.link_frame(link, &mut sim.frames);
     let centre = pose.transform_point(Vec3::from(a.point));
     let picked: Vec<u32> = (first..done.len())
         .filter(|&i| (done.x[i] - centre).length() <= a.radius)
         .map(|i| i as u32)
         .collect();
     if picked.is_empty() {
-        return Err(bad(format!(
-            "no garment vertex within {} m of {:?} in link '{}'",
-            a.radius, a.point, a.link
-        )));
+        return Err(GarmentError::AttachSelectsNothing {
+            garment: g.name.clone(),
+            index: k,
+            link: a.link.clone(),
+            point: a.point,
+            radius: a.radius,
+        });
     }
     for v in picked {
         done.attach(v, frame, &pose);

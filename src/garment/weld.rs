@@ -12,6 +12,7 @@ use crate::cloth::topology::{
     bending_stencils, springs, unique_edges, Spring, SpringKind, Stencil,
 };
 use crate::cloth::{Cloth, Material, Panel, Piece};
+use crate::effects::plan::{Elements, Pairs, SpringGroup, StencilGroup};
 use crate::Vec3;
 use glam::DVec2;
 use std::collections::HashMap;
@@ -256,4 +257,61 @@ fn cross_seam_bending(cloth: &Cloth, s: &SeamPairs) -> Vec<Stencil<3>> {
         });
     }
     out
+}
+
+/// A welded garment's elements for the effect plan: its own edges as stretch springs and its
+/// bending stencils, each with its own material, keyed `garments.material.*`. Free meshes resist
+/// shear with their own edges; skip-one springs and twist need a lattice, so there are none.
+impl Elements for Topology {
+    fn springs(&self, kind: SpringKind) -> Vec<SpringGroup> {
+        if kind != SpringKind::Structural {
+            return Vec::new();
+        }
+        let (springs, k): (Vec<Spring>, Vec<f64>) = self
+            .springs
+            .iter()
+            .zip(&self.spring_material)
+            .filter(|(_, m)| m.stretch > 0.0)
+            .map(|(s, m)| (*s, m.stretch))
+            .unzip();
+        vec![SpringGroup {
+            springs,
+            k,
+            parameter: "garments.material.stretch".into(),
+        }]
+    }
+
+    fn bending(&self) -> Vec<StencilGroup<3>> {
+        vec![StencilGroup {
+            stencils: self.bending.clone(),
+            rigidity: self.bending_rigidity.clone(),
+            parameter: "garments.material.bend_warp".into(),
+        }]
+    }
+
+    fn twist(&self) -> Vec<StencilGroup<4>> {
+        Vec::new()
+    }
+
+    fn spring_damping(&self) -> Pairs {
+        self.per_edge(|m| m.damping.spring)
+    }
+
+    fn diffusion(&self) -> Pairs {
+        self.per_edge(|m| m.damping.diffusion)
+    }
+}
+
+impl Topology {
+    /// Every edge whose material gives `f` > 0, with that value.
+    fn per_edge(&self, f: fn(&Material) -> f64) -> Pairs {
+        let (pairs, k) = self
+            .springs
+            .iter()
+            .zip(&self.spring_material)
+            .filter(|(_, m)| f(m) > 0.0)
+            .map(|(s, m)| ((s.i, s.j), f(m)))
+            .unzip();
+        Pairs { pairs, k }
+    }
 }

@@ -4,8 +4,12 @@
 //! so the committed summary (`docs/hard_cases.md`) is what the tests check.
 
 mod cases;
+mod edge;
+mod hanging;
+mod motion;
 mod report;
 mod runner;
+mod setup;
 
 pub use cases::{catalogue, CaseFn};
 pub use report::markdown;
@@ -92,13 +96,17 @@ pub struct Case {
 
 /// A case that could not be built (a bundled file missing, a scene the parser rejects).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum HardError {
-    #[error("hard case {case}: {source}")]
+    #[error("hard case {case}")]
     Scene {
         case: &'static str,
         #[source]
         source: crate::scene::SceneError,
     },
-    #[error("hard case {case}: {message}")]
-    Build { case: &'static str, message: String },
+    /// The case's hand-made panel was rejected by the cloth (its message).
+    #[error("hard case {case}: panel rejected: {message}")]
+    Panel { case: &'static str, message: String },
+    #[error("hard case {case}: no elastic effect to take the stability limit from")]
+    NoElasticEffect { case: &'static str },
 }

@@ -5,7 +5,7 @@
 use super::grasp::{Grasp, GraspEvent};
 use super::{Geometry, JointInput, JointPositions, JointTrajectory, Robot};
 use crate::collide::{Motion, Obstacle, ObstacleError};
-use crate::sim::Simulation;
+use crate::sim::{Frames, Simulation};
 use crate::{Pose, Vec3};
 use glam::DQuat;
 
@@ -163,6 +163,19 @@ impl RobotDriver {
     /// The frame bound to `link`, if any.
     pub fn frame_of(&self, link: usize) -> Option<usize> {
         self.bindings.get(link).and_then(|b| b.frame)
+    }
+
+    /// The frame that follows `link`: the one already bound, or a new frame `robot:<link>` in
+    /// `frames` at the link's current pose, bound now. Cloth attachments, grasps and garment
+    /// attachments to one link share it.
+    pub fn link_frame(&mut self, link: usize, frames: &mut Frames) -> usize {
+        if let Some(f) = self.frame_of(link) {
+            return f;
+        }
+        let name = format!("robot:{}", self.robot().link_names()[link]);
+        let f = frames.add(&name, self.poses[link]);
+        self.bind_frame(link, f);
+        f
     }
 
     /// Joint positions the source gives at time `t` (joints it does not name stay at zero).

@@ -1,12 +1,11 @@
-//! Turns a validated [`Scene`] into a [`Simulation`]. Only the effects the scene lists are built.
+//! Turns a validated [`Scene`] into a [`Simulation`] (and the driver of its robot): the cloth
+//! pieces, pins and attachments, frames, grasps, obstacles, and the effects through the scene's
+//! [`EffectPlan`] (only the effects the scene lists are built); garments are dressed here.
 
 use super::{EffectKind, RobotSpec, Scene, SceneError, Selection};
-use crate::cloth::topology::{bending_stencils, springs, twist_stencils, SpringKind};
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
-use crate::effects::{
-    AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs, Twist, VelocityDiffusion,
-};
+use crate::effects::{EffectPlan, Lattice, Term, WindPlan};
 use crate::integrate::ImplicitSettings;
 use crate::robot::driver::link_obstacles;
 use crate::robot::{
@@ -100,7 +99,8 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         add_grasps(scene, r, d, &cloth, &mut frames)?;
     }
 
-    let effects = build_effects(scene, &cloth);
+    let plan = scene.effect_plan();
+    let effects = plan.build(&cloth, &Lattice(&cloth));
     let integrator = scene.solver.integrator.build(ImplicitSettings {
         cg_tolerance: scene.solver.cg_tolerance,
         cg_max_iterations: scene.solver.cg_max_iterations,
@@ -120,8 +120,12 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         sim.set_collision(stage);
     }
     if !scene.garments.is_empty() {
-        crate::garment::dress(&mut sim, scene, driver.as_mut())
-            .map_err(|e| invalid(scene, "garments".into(), e.to_string()))?;
+        crate::garment::dress(&mut sim, &scene.garments, &plan, driver.as_mut()).map_err(
+            |source| SceneError::Garment {
+                origin: scene.name.clone(),
+                source: Box::new(source),
+            },
+        )?;
     }
     Ok((sim, driver))
 }
@@ -227,14 +231,7 @@ fn attach_to_links(
             )
         })?;
         let pose = driver.link_poses()[link];
-        let frame = match driver.frame_of(link) {
-            Some(f) => f,
-            None => {
-                let f = frames.add(&format!("robot:{}", a.link), pose);
-                driver.bind_frame(link, f);
-                f
-            }
-        };
+        let frame = driver.link_frame(link, frames);
         let mut sel = a.selection();
         if let Some(near) = sel.near.as_mut() {
             near.point = pose.transform_point(Vec3::from(near.point)).into();
@@ -301,14 +298,7 @@ fn add_grasps(
         if !(g.pads.xyz.iter().chain(&g.pads.rpy).all(|v| v.is_finite())) {
             return Err(invalid(scene, key("pads"), "pose must be finite".into()));
         }
-        let frame = match driver.frame_of(link) {
-            Some(f) => f,
-            None => {
-                let f = frames.add(&format!("robot:{}", g.link), driver.link_poses()[link]);
-                driver.bind_frame(link, f);
-                f
-            }
-        };
+        let frame = driver.link_frame(link, frames);
         let grasp = Grasp::new(link, frame, fingers, state, pads, candidates)
             .map_err(|e| invalid(scene, key("fingers"), e.to_string()))?;
         driver.add_grasp(grasp);
@@ -369,110 +359,46 @@ fn build_collision(
     })
 }
 
-fn build_effects(scene: &Scene, cloth: &Cloth) -> EffectSet {
-    let mut set = EffectSet::new();
-    let param = |i: usize, name: &str| format!("cloths[{i}].material.{name}");
-    for kind in &scene.effects {
-        match kind {
-            EffectKind::Gravity => {
-                set.push_gravity(Gravity::new(Vec3::from(scene.gravity), &cloth.mass))
-            }
-            EffectKind::Stretch | EffectKind::Shear | EffectKind::SkipOne => {
-                let (name, sk) = match kind {
-                    EffectKind::Stretch => ("stretch", SpringKind::Structural),
-                    EffectKind::Shear => ("shear", SpringKind::Shear),
-                    _ => ("skip_one", SpringKind::SkipOne),
-                };
-                for (i, p) in cloth.pieces.iter().enumerate() {
-                    let k = match kind {
-                        EffectKind::Stretch => p.material.stretch,
-                        EffectKind::Shear => p.material.shear,
-                        _ => p.material.skip_one,
-                    };
-                    let s = springs(p, sk);
-                    if k > 0.0 && !s.is_empty() {
-                        let ks = vec![k; s.len()];
-                        set.push(Box::new(Springs::new(name, s, ks, param(i, name))));
-                    }
-                }
-            }
-            EffectKind::Bending => {
-                for (i, p) in cloth.pieces.iter().enumerate() {
-                    let mut st = Vec::new();
-                    let mut c = Vec::new();
-                    for (along_u, b) in
-                        [(true, p.material.bend_warp), (false, p.material.bend_weft)]
-                    {
-                        if b > 0.0 {
-                            let s = bending_stencils(p, along_u);
-                            c.extend(std::iter::repeat_n(b, s.len()));
-                            st.extend(s);
-                        }
-                    }
-                    if !st.is_empty() {
-                        let which = if p.material.bend_warp >= p.material.bend_weft {
-                            "bend_warp"
-                        } else {
-                            "bend_weft"
-                        };
-                        set.push(Box::new(Bending::new(st, c, param(i, which))));
-                    }
-                }
-            }
-            EffectKind::Twist => {
-                for (i, p) in cloth.pieces.iter().enumerate() {
-                    let s = twist_stencils(p);
-                    if p.material.twist > 0.0 && !s.is_empty() {
-                        let c = vec![p.material.twist; s.len()];
-                        set.push(Box::new(Twist::new(s, c, param(i, "twist"))));
-                    }
-                }
-            }
-            EffectKind::Wind => {
-                if let Some(w) = &scene.wind {
-                    set.push(Box::new(w.effect(cloth.triangles.clone())));
-                }
-            }
-            EffectKind::Damping => build_damping(&mut set, cloth),
+impl Scene {
+    /// Builds the simulation this scene describes. A robot stays in its t = 0 pose: use
+    /// [`Scene::build_with_robot`] to get the driver that moves it.
+    pub fn build(&self) -> Result<Simulation, SceneError> {
+        build(self)
+    }
+
+    /// Builds the simulation and, when the scene has a `robot:` section, the driver that moves
+    /// the robot's obstacles and attachment frames (call `driver.advance` before each step).
+    pub fn build_with_robot(&self) -> Result<(Simulation, Option<RobotDriver>), SceneError> {
+        build_with_robot(self)
+    }
+
+    /// The effects this scene names, in its order, with its gravity and wind: what both a grid
+    /// cloth and dressed garments are built from.
+    pub fn effect_plan(&self) -> EffectPlan {
+        EffectPlan {
+            terms: self.effects.iter().map(|k| term(*k)).collect(),
+            gravity: Vec3::from(self.gravity),
+            wind: self.wind.as_ref().map(|w| WindPlan {
+                velocity: w.velocity,
+                keys: w.keys.clone(),
+                gusts: w.gusts.clone(),
+                air_density: w.air_density,
+                drag_coefficient: w.drag_coefficient,
+            }),
         }
     }
-    set
 }
 
-fn build_damping(set: &mut EffectSet, cloth: &Cloth) {
-    let mut spring_pairs = Vec::new();
-    let mut spring_kd = Vec::new();
-    let mut diff_pairs = Vec::new();
-    let mut diff_k = Vec::new();
-    for p in &cloth.pieces {
-        let d = p.material.damping;
-        if d.spring > 0.0 {
-            for kind in [SpringKind::Structural, SpringKind::Shear] {
-                for s in springs(p, kind) {
-                    spring_pairs.push((s.i, s.j));
-                    spring_kd.push(d.spring);
-                }
-            }
-        }
-        if d.diffusion > 0.0 {
-            for s in springs(p, SpringKind::Structural) {
-                diff_pairs.push((s.i, s.j));
-                diff_k.push(d.diffusion);
-            }
-        }
-    }
-    if !spring_pairs.is_empty() {
-        set.push(Box::new(SpringDamping::new(spring_pairs, spring_kd)));
-    }
-    let air: Vec<f64> = cloth
-        .pieces
-        .iter()
-        .flat_map(|p| std::iter::repeat_n(p.material.damping.air, p.vertex_count))
-        .collect();
-    if air.iter().any(|&a| a > 0.0) {
-        set.push(Box::new(AirDrag::new(&air, &cloth.mass)));
-    }
-    if !diff_pairs.is_empty() {
-        set.push(Box::new(VelocityDiffusion::new(diff_pairs, diff_k)));
+/// The plan's term for a scene's effect name.
+fn term(kind: EffectKind) -> Term {
+    match kind {
+        EffectKind::Gravity => Term::Gravity,
+        EffectKind::Stretch => Term::Stretch,
+        EffectKind::Shear => Term::Shear,
+        EffectKind::SkipOne => Term::SkipOne,
+        EffectKind::Bending => Term::Bending,
+        EffectKind::Twist => Term::Twist,
+        EffectKind::Wind => Term::Wind,
+        EffectKind::Damping => Term::Damping,
     }
 }

@@ -120,20 +120,6 @@ pub struct WindSpec {
     pub drag_coefficient: f64,
 }
 
-impl WindSpec {
-    /// The wind effect on a cloth of these triangles.
-    pub fn effect(&self, triangles: Vec<[u32; 3]>) -> crate::effects::Wind {
-        crate::effects::Wind::new(
-            self.velocity,
-            self.keys.clone(),
-            self.gusts.clone(),
-            self.air_density,
-            self.drag_coefficient,
-            triangles,
-        )
-    }
-}
-
 fn air_density() -> f64 {
     1.2
 }
@@ -390,6 +376,13 @@ pub enum SceneError {
         key: String,
         reason: String,
     },
+    /// The scene's garments could not be dressed (key `garments`).
+    #[error("{origin}: garments")]
+    Garment {
+        origin: String,
+        #[source]
+        source: Box<crate::garment::GarmentError>,
+    },
 }
 
 impl Scene {
@@ -426,19 +419,5 @@ impl Scene {
 
     pub fn has(&self, e: EffectKind) -> bool {
         self.effects.contains(&e)
-    }
-
-    /// Builds the simulation this scene describes. A robot stays in its t = 0 pose: use
-    /// [`Scene::build_with_robot`] to get the driver that moves it.
-    pub fn build(&self) -> Result<crate::sim::Simulation, SceneError> {
-        build(self)
-    }
-
-    /// Builds the simulation and, when the scene has a `robot:` section, the driver that moves
-    /// the robot's obstacles and attachment frames (call `driver.advance` before each step).
-    pub fn build_with_robot(
-        &self,
-    ) -> Result<(crate::sim::Simulation, Option<crate::robot::RobotDriver>), SceneError> {
-        build_with_robot(self)
     }
 }

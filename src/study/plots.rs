@@ -65,12 +65,12 @@ struct Axes<'a> {
 
 /// Draws one SVG log-log chart: every plot of the study is one of these.
 fn draw_loglog(path: &Path, axes: Axes, series: &[Series]) -> Result<(), StudyError> {
-    let err = |e: &dyn std::fmt::Display| StudyError::Plot {
+    let err = |source| StudyError::Plot {
         path: path.to_path_buf(),
-        reason: e.to_string(),
+        source,
     };
     let root = SVGBackend::new(path, (800, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    root.fill(&WHITE).map_err(err)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(&axes.caption, ("sans-serif", 18))
         .margin(12)
@@ -80,7 +80,7 @@ fn draw_loglog(path: &Path, axes: Axes, series: &[Series]) -> Result<(), StudyEr
             (axes.x.0..axes.x.1).log_scale(),
             (axes.y.0..axes.y.1).log_scale(),
         )
-        .map_err(|e| err(&e))?;
+        .map_err(err)?;
     let x_fmt = |x: &f64| {
         if axes.x_decimal {
             format!("{x:.0}")
@@ -95,7 +95,7 @@ fn draw_loglog(path: &Path, axes: Axes, series: &[Series]) -> Result<(), StudyEr
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&|y| format!("{y:.0e}"))
         .draw()
-        .map_err(|e| err(&e))?;
+        .map_err(err)?;
     for s in series {
         let c = s.color;
         let (line, marker) = (s.line, s.marker);
@@ -109,18 +109,18 @@ fn draw_loglog(path: &Path, axes: Axes, series: &[Series]) -> Result<(), StudyEr
         if line {
             chart
                 .draw_series(LineSeries::new(s.points.clone(), c.stroke_width(2)))
-                .map_err(|e| err(&e))?
+                .map_err(err)?
                 .label(s.label.as_str())
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
                 });
             if marker.is_some() {
-                chart.draw_series(circles).map_err(|e| err(&e))?;
+                chart.draw_series(circles).map_err(err)?;
             }
         } else {
             chart
                 .draw_series(circles)
-                .map_err(|e| err(&e))?
+                .map_err(err)?
                 .label(s.label.as_str())
                 .legend(move |(x, y)| Circle::new((x + 8, y), r, style));
         }
@@ -131,8 +131,8 @@ fn draw_loglog(path: &Path, axes: Axes, series: &[Series]) -> Result<(), StudyEr
         .border_style(BLACK)
         .position(axes.legend)
         .draw()
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))
+        .map_err(err)?;
+    root.present().map_err(err)
 }
 
 pub fn write_all(out: &Path, r: &StudyResult) -> Result<Vec<PathBuf>, StudyError> {

@@ -85,10 +85,10 @@ pub fn reference(
         write(&path, &head, &r)?;
         return Ok(r);
     }
-    Err(StudyError::Reference {
+    Err(StudyError::ReferenceDiverged {
         scene: scene.name().to_string(),
         n,
-        reason: format!("RK4 diverged down to dt level {}", dt_level + RETRIES),
+        dt_level: dt_level + RETRIES,
     })
 }
 

@@ -94,3 +94,20 @@ impl RosMessage for MarkerArray {
         self.markers.iter().all(|m| m.distro == distro)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every type this module defines has a complete schema (the list comes from the
+    /// `ros_message!` table above, so the test lives here rather than in `schema`).
+    #[test]
+    fn every_known_type_resolves_completely() {
+        for name in ALL_TYPE_NAMES {
+            for d in [Distro::Humble, Distro::Jazzy] {
+                assert!(schema::schema_text(name, d).is_some(), "{name} ({d})");
+            }
+        }
+        assert!(schema::schema_text("nav_msgs/msg/Odometry", Distro::Jazzy).is_none());
+    }
+}

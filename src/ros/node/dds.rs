@@ -2,24 +2,21 @@
 //! simulation thread, its outputs are published here, services and parameters are served
 //! here. Nothing in this file does physics.
 
+use super::clock::{ClockMode, WallClock};
+use super::config::{real_time_preview, LoopConfig};
+use super::endpoints::{context, endpoints, Endpoints};
+use super::messages::{Command, Level, Output};
 use super::network::Network;
-use super::params::{positive_rate, DescriptionSource, NodeParams, ServiceWire};
-use super::sim_loop::{self, ClockMode, Command, Level, LoopConfig, Output, SimLoop, WallClock};
+use super::params::{positive_rate, NodeParams};
+use super::sim_loop::SimLoop;
 use super::NodeError;
 use crate::robot::JointInput;
-use crate::ros::msg::{
-    Clock, DiagnosticArray, JointState, Marker, MarkerArray, PointCloud2, RosString,
-    TriggerRequest, TriggerResponse,
-};
+use crate::ros::msg::TriggerResponse;
 use crate::ros::Distro;
 use crate::scene::Scene;
-use ros2_client::dds::rustdds;
 use ros2_client::log::LogLevel;
-use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{
-    Context, MessageTypeName, Name, Node, NodeLoggingHandle, NodeName, NodeOptions, ParameterValue,
-    Publisher, QosProfile, RmwRequestId, RosoutRaw, Server, ServiceMapping, ServiceTypeName,
-    Subscription,
+    NodeLoggingHandle, NodeName, NodeOptions, ParameterValue, RmwRequestId, RosoutRaw,
 };
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -38,44 +35,6 @@ const MAX_TAKE: usize = 256;
 pub struct NodeSummary {
     pub frames_published: u64,
     pub joint_states_received: u64,
-}
-
-/// Resolves a topic name: `~/x` is private to the node (`/<ns>/<node>/x`), `/x` absolute,
-/// anything else relative to the namespace.
-pub fn resolve_topic(topic: &str, namespace: &str, node: &str) -> Result<Name, String> {
-    let full = match topic.strip_prefix("~/") {
-        Some(rest) => format!("{}/{node}/{rest}", namespace.trim_end_matches('/')),
-        None => topic.to_string(),
-    };
-    Name::parse(&full).map_err(|e| format!("topic `{topic}`: {e:?}"))
-}
-
-/// A DDS participant for `net`: on `domain_id`, restricted to loopback when localhost-only.
-pub fn context(net: Network) -> Result<Context, NodeError> {
-    let mut b = rustdds::DomainParticipantBuilder::new(net.domain_id);
-    if net.localhost_only {
-        b = b.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
-    }
-    let dp = b
-        .build()
-        .map_err(|e| NodeError::Dds(format!("participant: {e:?}")))?;
-    Context::from_domain_participant(dp).map_err(|e| NodeError::Dds(format!("context: {e:?}")))
-}
-
-fn qos_sensor(depth: usize) -> QosProfile {
-    QosProfile::subscription_default().history(History::KeepLast { depth })
-}
-
-fn qos_reliable(depth: usize) -> QosProfile {
-    QosProfile::publisher_default()
-        .reliability(Reliability::Reliable {
-            when_full: WhenFull::Wait(Duration::from_millis(10)),
-        })
-        .history(History::KeepLast { depth })
-}
-
-fn qos_latched() -> QosProfile {
-    qos_reliable(1).durability(Durability::TransientLocal)
 }
 
 /// Polls `f` on a thread to completion (the spinner's futures are woken by RustDDS threads,
@@ -97,117 +56,6 @@ fn block_on<F: std::future::Future>(f: F) -> F::Output {
             Poll::Pending => std::thread::park_timeout(Duration::from_millis(100)),
         }
     }
-}
-
-struct Endpoints {
-    joint_states: Subscription<JointState>,
-    description: Option<Subscription<RosString>>,
-    clock: Option<Subscription<Clock>>,
-    mesh: Publisher<Marker>,
-    points: Publisher<PointCloud2>,
-    obstacles: Publisher<MarkerArray>,
-    diagnostics: Publisher<DiagnosticArray>,
-    reset: Server<TriggerRequest, TriggerResponse>,
-    pause: Server<TriggerRequest, TriggerResponse>,
-    resume: Server<TriggerRequest, TriggerResponse>,
-}
-
-fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError> {
-    let (ns, name) = (p.namespace.as_str(), p.name.as_str());
-    let topic = |t: &str| resolve_topic(t, ns, name).map_err(NodeError::Topic);
-    let dds = |what: &str, e: ros2_client::CreateError| NodeError::Dds(format!("{what}: {e:?}"));
-    let t = &p.topics;
-    let mk_topic = |node: &mut Node, n: &str, pkg: &str, ty: &str, q: &QosProfile| {
-        node.create_topic(&topic(n)?, MessageTypeName::new(pkg, ty), q)
-            .map_err(|e| dds(n, e))
-    };
-    let js_t = mk_topic(
-        node,
-        &t.joint_states,
-        "sensor_msgs",
-        "JointState",
-        &qos_sensor(10),
-    )?;
-    let joint_states = node
-        .create_subscription(&js_t, Some(qos_sensor(10)))
-        .map_err(|e| dds(&t.joint_states, e))?;
-    let description = match p.robot_description {
-        DescriptionSource::Topic => {
-            let tt = mk_topic(
-                node,
-                &t.robot_description,
-                "std_msgs",
-                "String",
-                &qos_latched(),
-            )?;
-            Some(
-                node.create_subscription(&tt, Some(qos_latched()))
-                    .map_err(|e| dds(&t.robot_description, e))?,
-            )
-        }
-        DescriptionSource::File => None,
-    };
-    let clock = if p.use_sim_time {
-        let ct = mk_topic(node, &t.clock, "rosgraph_msgs", "Clock", &qos_sensor(1))?;
-        Some(
-            node.create_subscription(&ct, Some(qos_sensor(1)))
-                .map_err(|e| dds(&t.clock, e))?,
-        )
-    } else {
-        None
-    };
-    let frames = qos_reliable(1);
-    let mt = mk_topic(node, &t.mesh, "visualization_msgs", "Marker", &frames)?;
-    let pt = mk_topic(node, &t.points, "sensor_msgs", "PointCloud2", &frames)?;
-    let ot = mk_topic(
-        node,
-        &t.obstacles,
-        "visualization_msgs",
-        "MarkerArray",
-        &frames,
-    )?;
-    let dt = mk_topic(
-        node,
-        &t.diagnostics,
-        "diagnostic_msgs",
-        "DiagnosticArray",
-        &qos_reliable(10),
-    )?;
-    let mapping = match p.service_wire {
-        ServiceWire::Enhanced => ServiceMapping::Enhanced,
-        ServiceWire::Cyclone => ServiceMapping::Cyclone,
-    };
-    let svc_qos = qos_reliable(10);
-    let server = |node: &mut Node, n: &str| {
-        node.create_server(
-            mapping,
-            &topic(n)?,
-            &ServiceTypeName::new("std_srvs", "Trigger"),
-            svc_qos.clone(),
-            svc_qos.clone(),
-        )
-        .map_err(|e| dds(n, e))
-    };
-    Ok(Endpoints {
-        joint_states,
-        description,
-        clock,
-        mesh: node
-            .create_publisher(&mt, None)
-            .map_err(|e| dds("mesh", e))?,
-        points: node
-            .create_publisher(&pt, None)
-            .map_err(|e| dds("points", e))?,
-        obstacles: node
-            .create_publisher(&ot, None)
-            .map_err(|e| dds("obstacles", e))?,
-        diagnostics: node
-            .create_publisher(&dt, None)
-            .map_err(|e| dds("diagnostics", e))?,
-        reset: server(node, "~/reset")?,
-        pause: server(node, "~/pause")?,
-        resume: server(node, "~/resume")?,
-    })
 }
 
 /// Parameters served through ros2-client's parameter services. Live: `publish_rate`,
@@ -346,13 +194,13 @@ impl Throttle {
 pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummary, NodeError> {
     let distro = match params.distro {
         Some(d) => d,
-        None => Distro::from_env().map_err(|e| NodeError::Params(e.to_string()))?,
+        None => Distro::from_env()?,
     };
     let mut scene = Scene::load(&params.scene)?;
     if params.real_time_preview {
-        sim_loop::real_time_preview(&mut scene);
+        real_time_preview(&mut scene);
     }
-    let net = Network::from_env().map_err(NodeError::Params)?;
+    let net = Network::from_env()?;
     let wall = WallClock::new();
     let cfg = LoopConfig {
         name: params.name.clone(),
@@ -394,18 +242,19 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
     let (cmd_tx, cmd_rx) = mpsc::channel::<Command>();
     let (out_tx, out_rx) = mpsc::channel::<Output>();
     let ctx = context(net)?;
-    let node_name = NodeName::new(&params.namespace, &params.name).map_err(|e| {
-        NodeError::Params(format!(
-            "node name `{}` in `{}`: {e:?}",
-            params.name, params.namespace
-        ))
-    })?;
+    let node_name =
+        NodeName::new(&params.namespace, &params.name).map_err(|source| NodeError::NodeName {
+            name: params.name.clone(),
+            namespace: params.namespace.clone(),
+            source,
+        })?;
     let mut node = ctx
         .new_node(node_name, node_options(params, wind, cmd_tx.clone()))
-        .map_err(|e| NodeError::Dds(format!("node: {e:?}")))?;
-    let spinner = node
-        .spinner()
-        .map_err(|e| NodeError::Dds(format!("spinner: {e:?}")))?;
+        .map_err(|source| NodeError::Node {
+            name: params.name.clone(),
+            source,
+        })?;
+    let spinner = node.spinner().map_err(NodeError::Spinner)?;
     let spin_thread = std::thread::Builder::new()
         .name("drape-spin".into())
         .spawn(move || {
@@ -413,7 +262,10 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
                 log::warn!("ROS spinner ended: {e:?}");
             }
         })
-        .map_err(|e| NodeError::Dds(format!("spinner thread: {e}")))?;
+        .map_err(|source| NodeError::Thread {
+            thread: "ROS spinner",
+            source,
+        })?;
     let ep = endpoints(&mut node, params)?;
     let logger = node.logging_handle();
 
@@ -426,8 +278,11 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
     let sim_flag = sim_stop.clone();
     let sim_thread = std::thread::Builder::new()
         .name("drape-sim".into())
-        .spawn(move || sim_loop::run(core, mode, wall, cmd_rx, out_tx, &sim_flag))
-        .map_err(|e| NodeError::Dds(format!("simulation thread: {e}")))?;
+        .spawn(move || super::thread::run(core, mode, wall, cmd_rx, out_tx, &sim_flag))
+        .map_err(|source| NodeError::Thread {
+            thread: "simulation",
+            source,
+        })?;
 
     let result = serve(&ep, &logger, &cmd_tx, &out_rx, &stop);
     // Shut down: the simulation thread first (it may be mid-step), then DDS.
@@ -573,24 +428,4 @@ fn serve(
         }
     }
     Ok(summary)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tilde_topics_resolve_under_the_node() {
-        let n = NodeName::new("/", "drape").unwrap();
-        let dds = |t: &str, ns: &str| {
-            resolve_topic(t, ns, "drape")
-                .unwrap()
-                .to_dds_name("rt", &n, "")
-        };
-        assert_eq!(dds("~/mesh", "/"), "rt/drape/mesh");
-        assert_eq!(dds("~/mesh", "/robot1"), "rt/robot1/drape/mesh");
-        assert_eq!(dds("/joint_states", "/robot1"), "rt/joint_states");
-        assert!(resolve_topic("~/", "/", "drape").is_err());
-        assert!(resolve_topic("bad topic", "/", "drape").is_err());
-    }
 }

@@ -9,17 +9,29 @@ pub struct Network {
     pub localhost_only: bool,
 }
 
+/// An environment variable with a value the node cannot use.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NetworkError {
+    #[error("ROS_DOMAIN_ID={value:?}: expected an integer 0..={max}")]
+    DomainId { value: String, max: u16 },
+    #[error(
+        "ROS_AUTOMATIC_DISCOVERY_RANGE={value:?}: expected SUBNET, LOCALHOST, OFF or SYSTEM_DEFAULT"
+    )]
+    DiscoveryRange { value: String },
+}
+
 /// Highest domain id whose ports fit below 65535 with the RTPS port mapping.
 pub const MAX_DOMAIN_ID: u16 = 232;
 
 impl Network {
     /// Reads the process environment.
-    pub fn from_env() -> Result<Network, String> {
+    pub fn from_env() -> Result<Network, NetworkError> {
         Network::from_lookup(|k| std::env::var(k).ok())
     }
 
     /// Reads the variables through `get` (testable without touching the environment).
-    pub fn from_lookup(get: impl Fn(&str) -> Option<String>) -> Result<Network, String> {
+    pub fn from_lookup(get: impl Fn(&str) -> Option<String>) -> Result<Network, NetworkError> {
         let domain_id = match get("ROS_DOMAIN_ID").map(|s| s.trim().to_string()) {
             None => 0,
             Some(s) if s.is_empty() => 0,
@@ -27,8 +39,9 @@ impl Network {
                 .parse::<u16>()
                 .ok()
                 .filter(|d| *d <= MAX_DOMAIN_ID)
-                .ok_or_else(|| {
-                    format!("ROS_DOMAIN_ID={s:?}: expected an integer 0..={MAX_DOMAIN_ID}")
+                .ok_or(NetworkError::DomainId {
+                    value: s,
+                    max: MAX_DOMAIN_ID,
                 })?,
         };
         let flag = get("ROS_LOCALHOST_ONLY").is_some_and(|v| v.trim() == "1");
@@ -40,9 +53,9 @@ impl Network {
             // OFF means no automatic discovery at all; localhost is the closest RustDDS offers.
             Some("LOCALHOST") | Some("OFF") => true,
             Some(other) => {
-                return Err(format!(
-                    "ROS_AUTOMATIC_DISCOVERY_RANGE={other:?}: expected SUBNET, LOCALHOST, OFF or SYSTEM_DEFAULT"
-                ))
+                return Err(NetworkError::DiscoveryRange {
+                    value: other.to_string(),
+                })
             }
         };
         Ok(Network {
@@ -57,7 +70,7 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
-    fn net(vars: &[(&str, &str)]) -> Result<Network, String> {
+    fn net(vars: &[(&str, &str)]) -> Result<Network, NetworkError> {
         let m: HashMap<String, String> = vars
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
@@ -70,8 +83,16 @@ mod tests {
         assert_eq!(net(&[]), Ok(Network::default()));
         assert_eq!(net(&[("ROS_DOMAIN_ID", "42")]).unwrap().domain_id, 42);
         assert!(net(&[("ROS_DOMAIN_ID", "233")]).is_err());
+        assert_eq!(
+            net(&[("ROS_DOMAIN_ID", "x")]),
+            Err(NetworkError::DomainId {
+                value: "x".into(),
+                max: MAX_DOMAIN_ID
+            })
+        );
         assert!(net(&[("ROS_DOMAIN_ID", "x")])
             .unwrap_err()
+            .to_string()
             .contains("ROS_DOMAIN_ID"));
         assert!(net(&[("ROS_LOCALHOST_ONLY", "1")]).unwrap().localhost_only);
         assert!(!net(&[("ROS_LOCALHOST_ONLY", "0")]).unwrap().localhost_only);
@@ -85,6 +106,11 @@ mod tests {
                 .unwrap()
                 .localhost_only
         );
-        assert!(net(&[("ROS_AUTOMATIC_DISCOVERY_RANGE", "LAN")]).is_err());
+        assert_eq!(
+            net(&[("ROS_AUTOMATIC_DISCOVERY_RANGE", "LAN")]),
+            Err(NetworkError::DiscoveryRange {
+                value: "LAN".into()
+            })
+        );
     }
 }

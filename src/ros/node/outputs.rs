@@ -1,7 +1,7 @@
 //! Messages the node publishes besides the cloth: `/diagnostics` and the obstacle markers.
 //! Pure functions of the simulation state.
 
-use super::sim_loop::LoopStats;
+use super::messages::LoopStats;
 use crate::robot::{Geometry, RobotDriver};
 use crate::ros::msg::{
     ColorRGBA, DiagnosticArray, DiagnosticStatus, Distro, Header, KeyValue, Marker, MarkerArray,

@@ -1,135 +1,25 @@
-//! The simulation side of the node: owns the scene, the simulation and the robot; takes
+//! The simulation side of the node ([`SimLoop`]): owns the scene, the simulation and the robot; takes
 //! commands (joint states, clock ticks, robot descriptions, reset, pause) and emits
 //! ready-to-publish messages at fixed rates. No DDS here, so all of it runs in tests with a
 //! synthetic clock.
 
+use super::clock::time_of;
+use super::config::LoopConfig;
+use super::joints::JointGate;
+use super::messages::{Command, DroppedInputs, Level, LoopStats, Output};
 use super::outputs::{diagnostics, obstacle_markers, DiagnosticsInput};
 use super::pacer::{Pacer, Schedule};
-use crate::robot::{JointInput, JointInputError, JointPositions, JointSource, RobotDriver};
-use crate::ros::msg::{ColorRGBA, DiagnosticArray, Marker, MarkerArray, PointCloud2, Time};
-use crate::ros::{mesh_marker, point_cloud, Distro};
+use super::params::positive_rate;
+use crate::robot::{JointInput, JointSource, RobotDriver};
+use crate::ros::msg::{ColorRGBA, DiagnosticArray};
+use crate::ros::{mesh_marker, point_cloud};
 use crate::scene::{Scene, SceneError};
 use crate::sim::Simulation;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Seconds over which the robot moves from its initial pose to the last commanded one after a
 /// reset, so attached cloth is carried, not torn.
 const RESET_BLEND_S: f64 = 0.5;
-
-/// Something for the simulation thread to do.
-#[derive(Debug, Clone)]
-pub enum Command {
-    /// A joint state: its header stamp (0: unstamped) and content.
-    Joints {
-        stamp_ns: i64,
-        input: JointInput,
-    },
-    /// A URDF (e.g. from `/robot_description`): rebuild the scene with this robot.
-    RobotDescription(String),
-    /// Simulated clock time (s) from `/clock`; ignored on the wall clock.
-    Clock(f64),
-    /// Restore the initial cloth; answered by [`Output::ResetDone`] with the same id.
-    Reset {
-        id: u64,
-    },
-    Pause(bool),
-    PublishRate(f64),
-    /// New constant wind velocity (m/s) for a scene that names wind; kept across resets.
-    Wind([f64; 3]),
-    Stop,
-}
-
-/// Log severity of an [`Output::Log`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Level {
-    Info,
-    Warn,
-    Error,
-}
-
-/// Something for the DDS side to publish.
-#[derive(Debug, Clone)]
-pub enum Output {
-    Frame {
-        mesh: Box<Marker>,
-        points: Box<PointCloud2>,
-    },
-    Obstacles(MarkerArray),
-    Diagnostics(DiagnosticArray),
-    Log {
-        level: Level,
-        text: String,
-    },
-    ResetDone {
-        id: u64,
-        result: Result<String, String>,
-    },
-}
-
-/// How the loop publishes.
-#[derive(Debug, Clone)]
-pub struct LoopConfig {
-    /// Node name: diagnostics status name and marker namespace.
-    pub name: String,
-    pub distro: Distro,
-    /// Empty: the robot's root link, else `world`.
-    pub frame_id: String,
-    pub publish_rate: f64,
-    /// 0: no obstacle markers.
-    pub obstacles_rate: f64,
-    pub diagnostics_rate: f64,
-    pub max_backlog_steps: u32,
-    pub paused: bool,
-    pub color: [f32; 4],
-}
-
-impl Default for LoopConfig {
-    fn default() -> Self {
-        Self {
-            name: "drape".into(),
-            distro: Distro::Jazzy,
-            frame_id: String::new(),
-            publish_rate: 30.0,
-            obstacles_rate: 2.0,
-            diagnostics_rate: 1.0,
-            max_backlog_steps: 6,
-            paused: false,
-            color: [0.85, 0.35, 0.2, 1.0],
-        }
-    }
-}
-
-/// Why joint states were dropped, counted per reason.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct DroppedInputs {
-    pub non_finite: u64,
-    pub wrong_length: u64,
-    pub unknown_joint: u64,
-    pub out_of_order: u64,
-    /// Duplicate names, free joints, or no robot in the scene.
-    pub other: u64,
-}
-
-impl DroppedInputs {
-    pub fn total(&self) -> u64 {
-        self.non_finite + self.wrong_length + self.unknown_joint + self.out_of_order + self.other
-    }
-}
-
-/// Running totals since start.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct LoopStats {
-    pub steps: u64,
-    pub frames: u64,
-    pub joint_states: u64,
-    pub dropped: DroppedInputs,
-    pub divergences: u64,
-    pub descriptions_loaded: u64,
-    pub description_failures: u64,
-    pub resets: u64,
-}
 
 /// Measurements since the last diagnostics message.
 #[derive(Debug, Clone, Default)]
@@ -152,10 +42,7 @@ pub struct SimLoop {
     sim: Simulation,
     driver: Option<RobotDriver>,
     frame_id: String,
-    commanded: Option<JointPositions>,
-    /// A changed joint command arrived that no step has reached yet.
-    fresh_command: bool,
-    last_stamp: Option<i64>,
+    joints: JointGate,
     pacer: Pacer,
     publish: Schedule,
     obstacles: Option<Schedule>,
@@ -177,7 +64,7 @@ impl SimLoop {
             (&mut cfg.publish_rate, defaults.publish_rate),
             (&mut cfg.diagnostics_rate, defaults.diagnostics_rate),
         ] {
-            if super::params::positive_rate(*rate).is_err() {
+            if positive_rate(*rate).is_err() {
                 log::warn!("rate {rate} Hz is unusable; using {default} Hz");
                 *rate = default;
             }
@@ -198,9 +85,7 @@ impl SimLoop {
             cfg,
             sim,
             driver: None,
-            commanded: None,
-            fresh_command: false,
-            last_stamp: None,
+            joints: JointGate::default(),
             stats: LoopStats::default(),
             window: Window {
                 clock_start: now,
@@ -298,7 +183,7 @@ impl SimLoop {
                 }
             }
             Command::PublishRate(r) => {
-                if super::params::positive_rate(r).is_ok() {
+                if positive_rate(r).is_ok() {
                     self.cfg.publish_rate = r;
                     self.publish.set_rate(r, now);
                 }
@@ -338,7 +223,7 @@ impl SimLoop {
         } else {
             owed = self.pacer.due_steps(now, self.sim.time());
             if owed > 0 {
-                reached = std::mem::take(&mut self.fresh_command);
+                reached = std::mem::take(&mut self.joints.fresh);
                 self.step_once(now, out);
             }
         }
@@ -471,55 +356,17 @@ impl SimLoop {
     }
 
     fn on_joints(&mut self, stamp_ns: i64, input: &JointInput, out: &mut Vec<Output>) {
-        let Some(d) = &mut self.driver else {
-            self.stats.dropped.other += 1;
-            drop_warning(out, &self.stats.dropped, "the scene has no robot");
-            return;
-        };
-        if stamp_ns != 0 && self.last_stamp.is_some_and(|last| stamp_ns < last) {
-            self.stats.dropped.out_of_order += 1;
-            let msg = format!(
-                "stamp {:.6} s is older than the last accepted one",
-                stamp_ns as f64 * 1e-9
-            );
-            drop_warning(out, &self.stats.dropped, &msg);
-            return;
+        let (t, dt) = (self.sim.time(), self.sim.settings.dt);
+        match self
+            .joints
+            .accept(self.driver.as_mut(), t, dt, stamp_ns, input)
+        {
+            Ok(()) => self.stats.joint_states += 1,
+            Err(why) => {
+                why.count(&mut self.stats.dropped);
+                drop_warning(out, &self.stats.dropped, &why.to_string());
+            }
         }
-        let base = self
-            .commanded
-            .clone()
-            .unwrap_or_else(|| d.joint_positions().clone());
-        let mut q = base.clone();
-        if let Err(e) = input.apply(d.robot().kinematics(), &mut q) {
-            let slot = match e {
-                JointInputError::NotFinite { .. } | JointInputError::NonFinitePose(_) => {
-                    &mut self.stats.dropped.non_finite
-                }
-                JointInputError::Empty | JointInputError::LengthMismatch { .. } => {
-                    &mut self.stats.dropped.wrong_length
-                }
-                JointInputError::UnknownJoint(_) => &mut self.stats.dropped.unknown_joint,
-                _ => &mut self.stats.dropped.other,
-            };
-            *slot += 1;
-            drop_warning(out, &self.stats.dropped, &e.to_string());
-            return;
-        }
-        if stamp_ns != 0 {
-            self.last_stamp = Some(stamp_ns);
-        }
-        self.stats.joint_states += 1;
-        // Reach the new pose at the end of the next step; the simulation interpolates the links
-        // across its substeps.
-        let t = self.sim.time();
-        let now_q = d.joint_positions().clone();
-        let dt = self.sim.settings.dt;
-        d.set_source(
-            JointSource::Stream(vec![(t, now_q), (t + dt, q.clone())]),
-            t,
-        );
-        self.fresh_command |= q != base;
-        self.commanded = Some(q);
     }
 
     fn on_description(&mut self, urdf: String, now: f64, out: &mut Vec<Output>) {
@@ -544,8 +391,7 @@ impl SimLoop {
                     .map_or(String::new(), |d| d.robot().name.clone());
                 self.scene = scene;
                 self.sim = sim;
-                self.commanded = None;
-                self.last_stamp = None;
+                self.joints.clear();
                 self.install_robot(driver);
                 self.pacer.hold(now, self.sim.time());
                 self.stats.descriptions_loaded += 1;
@@ -581,7 +427,7 @@ impl SimLoop {
     fn install_robot(&mut self, mut driver: Option<RobotDriver>) {
         if let Some(d) = driver.as_mut() {
             let q0 = d.joint_positions().clone();
-            let stream = match &self.commanded {
+            let stream = match &self.joints.commanded {
                 Some(q) if q.positions.len() == q0.positions.len() => {
                     vec![(0.0, q0), (RESET_BLEND_S, q.clone())]
                 }
@@ -615,221 +461,4 @@ fn drop_warning(out: &mut Vec<Output>, dropped: &DroppedInputs, why: &str) {
 
 fn log(out: &mut Vec<Output>, level: Level, text: String) {
     out.push(Output::Log { level, text });
-}
-
-/// The real-time preview solver settings: one substep, CG tolerance 1e-2, at most 50 CG
-/// iterations, for an implicit scene (other integrators keep their settings: fewer substeps
-/// would make them unstable). Trades accuracy (stiffer-looking, less converged cloth) for a
-/// step several times cheaper, so a large cloth can keep real time.
-pub fn real_time_preview(scene: &mut Scene) {
-    if scene.solver.integrator == crate::integrate::IntegratorKind::Implicit {
-        scene.solver.substeps = 1;
-        scene.solver.cg_tolerance = scene.solver.cg_tolerance.max(1e-2);
-        scene.solver.cg_max_iterations = scene.solver.cg_max_iterations.min(50);
-    }
-}
-
-/// ROS time from seconds (negative clamps to 0).
-pub fn time_of(seconds: f64) -> Time {
-    Time::from_nanos((seconds * 1e9).round().max(0.0) as u64)
-}
-
-/// Which clock paces the loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ClockMode {
-    /// System time (stamps are Unix time).
-    Wall,
-    /// `/clock` messages ([`Command::Clock`]); nothing runs before the first one.
-    Sim,
-}
-
-/// Seconds since the Unix epoch, from a monotonic clock anchored once.
-#[derive(Debug, Clone, Copy)]
-pub struct WallClock {
-    start: Instant,
-    epoch: f64,
-}
-
-impl WallClock {
-    pub fn new() -> WallClock {
-        let epoch = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64());
-        WallClock {
-            start: Instant::now(),
-            epoch,
-        }
-    }
-
-    pub fn now(&self) -> f64 {
-        self.epoch + self.start.elapsed().as_secs_f64()
-    }
-}
-
-impl Default for WallClock {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// The simulation thread: waits for commands until the next thing is due, ticks, and sends the
-/// outputs. Returns on [`Command::Stop`], on `stop`, or when either channel closes.
-pub fn run(
-    mut core: SimLoop,
-    mode: ClockMode,
-    wall: WallClock,
-    rx: Receiver<Command>,
-    tx: Sender<Output>,
-    stop: &AtomicBool,
-) {
-    let mut out = Vec::new();
-    let mut now = match mode {
-        ClockMode::Wall => Some(wall.now()),
-        ClockMode::Sim => None,
-    };
-    if let Some(n) = now {
-        core.sync_clock(n);
-    }
-    let mut behind = false;
-    let started = Instant::now();
-    let mut warned_no_clock = false;
-    while !stop.load(Ordering::Relaxed) {
-        if now.is_none() && !warned_no_clock && started.elapsed() > Duration::from_secs(5) {
-            warned_no_clock = true;
-            out.push(Output::Log {
-                level: Level::Warn,
-                text: "use_sim_time is set but no /clock (rosgraph_msgs/msg/Clock) has arrived \
-                       in 5 s: the simulation waits for it"
-                    .into(),
-            });
-        }
-        let wait = match (mode, now) {
-            _ if behind => 0.0,
-            (ClockMode::Wall, _) => (core.next_wake() - wall.now()).clamp(0.0, 0.05),
-            _ => 0.05,
-        };
-        let mut pending = Vec::new();
-        match rx.recv_timeout(Duration::from_secs_f64(wait)) {
-            Ok(c) => pending.push(c),
-            Err(RecvTimeoutError::Timeout) => {}
-            Err(RecvTimeoutError::Disconnected) => return,
-        }
-        pending.extend(rx.try_iter());
-        if mode == ClockMode::Wall {
-            now = Some(wall.now());
-        }
-        for cmd in pending {
-            if let (ClockMode::Sim, Command::Clock(t)) = (mode, &cmd) {
-                if now.is_none() {
-                    core.sync_clock(*t);
-                }
-                now = Some(*t);
-            }
-            let t = now.unwrap_or(0.0);
-            if !core.handle(cmd, t, &mut out) {
-                return;
-            }
-        }
-        behind = match now {
-            Some(t) => core.tick(t, &mut out),
-            None => false,
-        };
-        for o in out.drain(..) {
-            if tx.send(o).is_err() {
-                return;
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const T0: f64 = 1000.0;
-
-    fn towel(res: usize) -> Scene {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot_towel.yaml");
-        let mut scene = Scene::load(path.as_ref()).expect("robot_towel scene");
-        scene.cloths[0].grid.resolution = [res, res];
-        scene
-    }
-
-    fn shoulder(s: f64) -> Command {
-        Command::Joints {
-            stamp_ns: 0,
-            input: JointInput {
-                names: vec!["right_shoulder_pitch".into()],
-                positions: vec![s],
-                velocities: None,
-            },
-        }
-    }
-
-    fn frames(out: &[Output]) -> usize {
-        out.iter()
-            .filter(|o| matches!(o, Output::Frame { .. }))
-            .count()
-    }
-
-    /// Publish instants fall on even steps (T0, T0 + 2 dt, ...). A changed command before an
-    /// odd step publishes right after that step instead of a step later; an unchanged one does
-    /// not; and the number of frames per second stays the rate.
-    #[test]
-    fn a_step_reaching_a_new_command_publishes_a_step_early() {
-        let mut l = SimLoop::new(towel(6), LoopConfig::default(), T0).expect("loop");
-        let dt = l.simulation().settings.dt;
-        let mut out = Vec::new();
-        l.sync_clock(T0);
-        l.advance_to(T0, &mut out);
-        assert_eq!(frames(&out), 1);
-        // The scene's own pose, re-sent: nothing new to show, no early frame.
-        let q = l.driver().expect("robot").joint_positions().clone();
-        let j = l
-            .driver()
-            .unwrap()
-            .robot()
-            .joint_index("right_shoulder_pitch");
-        let s0 = q.positions[j.expect("shoulder")];
-        l.handle(shoulder(s0), T0 + 0.5 * dt, &mut out);
-        l.advance_to(T0 + dt, &mut out);
-        assert_eq!(frames(&out), 1, "unchanged command published early");
-        l.advance_to(T0 + 2.0 * dt, &mut out);
-        assert_eq!(frames(&out), 2);
-        // A new pose before the odd step at T0 + 3 dt: out right after it.
-        l.handle(shoulder(s0 + 0.05), T0 + 2.5 * dt, &mut out);
-        l.advance_to(T0 + 3.0 * dt, &mut out);
-        assert_eq!(
-            frames(&out),
-            3,
-            "new pose not published after the step reaching it"
-        );
-        // The instant at T0 + 4 dt was taken: none there; the grid resumes at T0 + 6 dt.
-        l.advance_to(T0 + 4.0 * dt, &mut out);
-        assert_eq!(frames(&out), 3);
-        let mut t = T0 + 4.0 * dt;
-        while t < T0 + 1.0 - 1e-9 {
-            t += 0.5 * dt;
-            l.advance_to(t, &mut out);
-        }
-        // Instants T0, T0 + 1/30, ..., T0 + 1: 31 frames, one of them early.
-        assert_eq!(frames(&out), 31);
-    }
-
-    #[test]
-    fn real_time_preview_changes_only_implicit_solver_settings() {
-        let mut scene = towel(6);
-        real_time_preview(&mut scene);
-        let s = &scene.solver;
-        assert_eq!(
-            (s.substeps, s.cg_tolerance, s.cg_max_iterations),
-            (1, 1e-2, 50)
-        );
-        let mut explicit = towel(6);
-        explicit.solver.integrator = crate::integrate::IntegratorKind::SymplecticEuler;
-        explicit.solver.substeps = 40;
-        let before = explicit.solver.clone();
-        real_time_preview(&mut explicit);
-        assert_eq!(explicit.solver, before);
-    }
 }

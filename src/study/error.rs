@@ -1,0 +1,32 @@
+//! What can stop a study: [`StudyError`], each variant with the file, scene or plot at fault
+//! and its cause as `source()`.
+
+use std::path::PathBuf;
+
+/// Why a study could not finish.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StudyError {
+    #[error("{path}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error(
+        "reference for scene '{scene}' at resolution {n}: RK4 diverged down to dt level {dt_level}"
+    )]
+    ReferenceDiverged {
+        scene: String,
+        n: usize,
+        dt_level: u32,
+    },
+    #[error("plot {path}")]
+    Plot {
+        path: PathBuf,
+        #[source]
+        source: plotters::drawing::DrawingAreaErrorKind<std::io::Error>,
+    },
+}
