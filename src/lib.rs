@@ -8,11 +8,13 @@
 // Numeric loops index several parallel arrays at once; iterator zips would hide the math.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cancel;
 pub mod cloth;
 pub mod collide;
 pub mod effects;
 pub mod garment;
 pub mod hard;
+pub mod input;
 pub mod integrate;
 pub mod mesh;
 pub mod pose;

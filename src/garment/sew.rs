@@ -155,6 +155,16 @@ pub fn sew(
     let mut steps = 0;
     let mut done: Vec<Option<Sewn>> = vec![None; garments.len()];
     loop {
+        if crate::cancel::requested() {
+            return Err(GarmentError::Sewing {
+                garment: garments
+                    .iter()
+                    .map(|g| g.0.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                reason: "stopped by a signal".into(),
+            });
+        }
         sim.step().map_err(|e| GarmentError::Sewing {
             garment: garments
                 .iter()
