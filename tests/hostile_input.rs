@@ -557,9 +557,9 @@ fn values_that_would_never_end_are_rejected() {
             "publish_rate",
         ),
         (
-            "publish_rate above 1/dt",
+            "publish_rate x duration",
             "duration: 0.1",
-            "duration: 0.1\npublish_rate: 51",
+            "duration: 1000\npublish_rate: 1e5",
             "publish_rate",
         ),
         ("dt 1e-300", "dt: 0.02", "dt: 1e-300", "solver.dt"),
@@ -1323,4 +1323,55 @@ fn errors_name_the_file_and_say_what_is_wrong() {
         &o,
         Expect::Error(&["latin1.yaml", "UTF-8"]),
     );
+}
+
+// ---------------------------------------------------------------- signals end every phase
+
+/// SIGTERM while the scene is still being built and its shirt sewn (before any frame is
+/// recorded) ends the run at once, with status 130 and no output left behind.
+#[test]
+fn a_signal_during_build_and_sewing_ends_the_run() {
+    let l = Layout::new();
+    let shirt = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/shirt.yaml");
+    let out = l.path("scene/out.mcap");
+    let mut child = Command::new(binary())
+        .args(["record", "--quiet", "--scene"])
+        .arg(&shirt)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drape");
+    std::thread::sleep(Duration::from_millis(200));
+    let sent = Instant::now();
+    let pid = libc::pid_t::try_from(child.id()).expect("pid");
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if sent.elapsed() > KILL_AFTER {
+            let _ = child.kill();
+            panic!("drape ignored SIGTERM during build");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert!(
+        sent.elapsed() < BUDGET,
+        "took {:?} after SIGTERM",
+        sent.elapsed()
+    );
+    if report_only() {
+        eprintln!("signal during build: {status} after {:?}", sent.elapsed());
+        return;
+    }
+    assert_eq!(status.code(), Some(130), "{status}");
+    assert!(!out.exists());
+    let left: Vec<_> = std::fs::read_dir(&l.scene_dir)
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
 }

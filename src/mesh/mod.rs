@@ -38,6 +38,18 @@ pub enum MeshError {
     UnsupportedFormat { path: PathBuf },
     #[error("mesh {path}: {message}")]
     Malformed { path: PathBuf, message: String },
+    #[error("mesh {path}: not a valid OBJ file")]
+    Obj {
+        path: PathBuf,
+        #[source]
+        source: tobj::LoadError,
+    },
+    #[error("mesh {path}: not a valid ASCII STL file")]
+    AsciiStl {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     #[error("mesh {path}: contains no triangles")]
     Empty { path: PathBuf },
     #[error(

@@ -44,8 +44,8 @@ pub enum Problem {
         count: f64,
         max: f64,
     },
-    #[error("{rate} Hz publishes more often than the {dt} s step (at most {max} Hz)")]
-    PublishFasterThanStep { rate: f64, dt: f64, max: f64 },
+    #[error("{rate:e} Hz for {duration} s is more than {max:e} frames")]
+    TooManyFrames { rate: f64, duration: f64, max: f64 },
     #[error("times must increase ({value} after {previous})")]
     NotIncreasing { value: f64, previous: f64 },
     #[error("{name:?} is listed twice")]
@@ -94,7 +94,8 @@ pub const MAX_GRAVITY: f64 = 1e4;
 /// above the upper one nothing in a cloth is resolved.
 pub const MIN_DT: f64 = 1e-6;
 pub const MAX_DT: f64 = 1.0;
-/// Most frame steps x substeps one run may ask for (`duration / dt * substeps`).
+/// Most frame steps x substeps one run may ask for (`duration / dt * substeps`), and most
+/// frames it may write (`publish_rate * duration`; a frame is written at most once per step).
 pub const MAX_TOTAL_SUBSTEPS: f64 = 1e7;
 /// Longest run (s): about eleven days of simulated time (the substep cap usually binds first).
 pub const MAX_DURATION: f64 = 1e6;
@@ -324,17 +325,24 @@ impl Scene {
         self.check_run_length(self.duration)
             .map_err(|p| ("duration".to_string(), p))?;
         positive("publish_rate", self.publish_rate, 1.0 / MIN_DT, " Hz")?;
-        // A frame is written at most once per step: a faster rate is a typo (1e300 Hz).
-        let max_rate = 1.0 / s.dt * (1.0 + 1e-9);
-        if self.publish_rate > max_rate {
+        // Frames the run writes: bounded like its steps (1e300 Hz stalled the recorder).
+        let frames = self.publish_rate * self.duration;
+        if frames > MAX_TOTAL_SUBSTEPS {
             return Err((
                 "publish_rate".into(),
-                Problem::PublishFasterThanStep {
+                Problem::TooManyFrames {
                     rate: self.publish_rate,
-                    dt: s.dt,
-                    max: 1.0 / s.dt,
+                    duration: self.duration,
+                    max: MAX_TOTAL_SUBSTEPS,
                 },
             ));
+        }
+        if self.publish_rate > 1.0 / s.dt * (1.0 + 1e-9) {
+            log::warn!(
+                "publish_rate {} Hz is faster than the {} s step: a frame is written every step",
+                self.publish_rate,
+                s.dt
+            );
         }
         bounded3("gravity", self.gravity, MAX_GRAVITY, " m/s^2")?;
         finite("solver.cg_tolerance", s.cg_tolerance)?;
