@@ -10,12 +10,14 @@
 // Numeric loops index several parallel arrays at once; iterator zips would hide the math.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cancel;
 pub mod cloth;
 pub mod collide;
 pub mod effects;
 pub mod garment;
 #[cfg(feature = "tools")]
 pub mod hard;
+pub mod input;
 pub mod integrate;
 pub mod linalg;
 pub mod mesh;

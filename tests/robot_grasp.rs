@@ -308,7 +308,7 @@ fn build_error(edit: impl Fn(String) -> String) -> String {
     std::fs::write(&path, text).unwrap();
     match Scene::load(&path).and_then(|s| s.build_with_robot().map(|_| ())) {
         Ok(()) => panic!("the edited scene built"),
-        Err(e) => e.to_string(),
+        Err(e) => drape::input::error_chain(&e),
     }
 }
 

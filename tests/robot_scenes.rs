@@ -257,7 +257,7 @@ fn robot_section_rejects_unknown_keys() {
     let path = scene_copy(dir.path(), "robot_towel.yaml", |t| {
         t.replacen("  attach:\n", "  atach:\n", 1)
     });
-    let msg = Scene::load(&path).expect_err("typo fails").to_string();
+    let msg = drape::input::error_chain(&Scene::load(&path).expect_err("typo fails"));
     assert!(msg.contains("atach"), "{msg}");
 }
 

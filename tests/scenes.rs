@@ -269,11 +269,9 @@ fn bad_scenes_name_the_key_and_reason() {
     for (from, to, want) in cases {
         assert!(base.contains(from), "{from}");
         let text = base.replacen(from, to, 1);
-        let err = Scene::from_yaml(&text, "test.yaml")
-            .unwrap_err()
-            .to_string();
+        let err = drape::input::error_chain(&Scene::from_yaml(&text, "test.yaml").unwrap_err());
         assert!(err.contains(want), "{to}: got `{err}`");
-        assert!(err.starts_with("test.yaml"), "{err}");
+        assert!(err.starts_with("error: test.yaml"), "{err}");
     }
 }
 

@@ -86,9 +86,45 @@ fn main() {
     .filter_module("rustdds::network::udp_sender", log::LevelFilter::Error)
     .init();
     if let Err(e) = run(Cli::parse()) {
-        eprintln!("drape: error: {e:#}");
+        eprintln!("drape: {}", chain(&e));
         std::process::exit(1);
     }
+}
+
+/// `error: <top>` then one `  caused by: <cause>` line per cause, each printed once (a cause
+/// whose text already ends the line above is not repeated).
+fn chain(e: &anyhow::Error) -> String {
+    let mut out = format!("error: {e}");
+    let mut last = e.to_string();
+    for c in e.chain().skip(1) {
+        let text = c.to_string();
+        if !last.ends_with(&text) {
+            out.push_str("\n  caused by: ");
+            out.push_str(&text);
+        }
+        last = text;
+    }
+    out
+}
+
+/// Set while the recorder runs: it ends on a stop request by finishing its bag. In every other
+/// phase (loading, building, sewing) a stop request ends the process at once.
+#[cfg(feature = "ros")]
+static FINISHES_ON_STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// SIGINT and SIGTERM set [`drape::cancel`]'s flag (polled by the recorder's and the sewing
+/// loops); outside the recording loop they end the process with status 130.
+#[cfg(feature = "ros")]
+fn install_stop_handler(graceful_always: bool) -> Result<()> {
+    use std::sync::atomic::Ordering;
+    ctrlc::set_handler(move || {
+        drape::cancel::request();
+        if !graceful_always && !FINISHES_ON_STOP.load(Ordering::SeqCst) {
+            eprintln!("drape: stopped by a signal");
+            std::process::exit(130);
+        }
+    })
+    .context("cannot install the Ctrl-C handler")
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -110,6 +146,8 @@ fn run(cli: Cli) -> Result<()> {
         #[cfg(feature = "tools")]
         Command::HardCases { full, out } => hard_cases(full, out),
         Command::Check { scene } => {
+            #[cfg(feature = "ros")]
+            install_stop_handler(false)?;
             let s = drape::scene::Scene::load(&scene)?;
             let sim = s.build()?;
             println!(
@@ -203,10 +241,17 @@ fn record(
 ) -> Result<()> {
     use drape::ros::record::{record_with_robot, RecordOptions};
     use drape::ros::Distro;
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
+    use std::sync::atomic::Ordering;
 
+    // Ctrl-C and SIGTERM end every phase: at once while loading and building, by finishing
+    // the bag while recording.
+    install_stop_handler(false)?;
     let scene = drape::scene::Scene::load(&scene_path)?;
+    if let Some(d) = duration {
+        scene
+            .check_run_length(d)
+            .with_context(|| format!("--duration {d:e}"))?;
+    }
     let distro = match distro {
         Some(d) => d
             .parse::<Distro>()
@@ -231,11 +276,11 @@ fn record(
         ..RecordOptions::default()
     };
 
-    // Ctrl-C and SIGTERM ask the loop to stop; the bag is then finished, not cut.
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
-        .context("cannot install the Ctrl-C handler")?;
+    // From here a stop request ends the loop, which finishes the bag instead of cutting it.
+    FINISHES_ON_STOP.store(true, Ordering::SeqCst);
+    if drape::cancel::requested() {
+        std::process::exit(130);
+    }
 
     let bar = if quiet {
         indicatif::ProgressBar::hidden()
@@ -248,11 +293,12 @@ fn record(
     );
     let start = sim.time();
     let total = opts.duration;
-    let summary = record_with_robot(&mut sim, driver.as_mut(), &out, &opts, &stop, |t| {
+    let stop = drape::cancel::flag();
+    let summary = record_with_robot(&mut sim, driver.as_mut(), &out, &opts, stop, |t| {
         bar.set_position(((t - start) * 1000.0) as u64);
         bar.set_message(format!("{:.2}/{total:.2} s simulated", t - start));
     })
-    .with_context(|| format!("recording {} to {}", scene_path.display(), out.display()))?;
+    .with_context(|| format!("{}: recording to {}", scene_path.display(), out.display()))?;
     bar.finish_and_clear();
     println!(
         "{}: {} frames, {:.2} s simulated in {} steps{}{}",

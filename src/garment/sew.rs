@@ -84,12 +84,18 @@ pub fn sew(
     let mut steps = 0;
     let mut done: Vec<Option<Sewn>> = vec![None; garments.len()];
     loop {
-        sim.step().map_err(|source| GarmentError::SewingDiverged {
-            garments: garments
+        let names = || {
+            garments
                 .iter()
                 .map(|g| g.0.name.as_str())
                 .collect::<Vec<_>>()
-                .join(", "),
+                .join(", ")
+        };
+        if crate::cancel::requested() {
+            return Err(GarmentError::Cancelled { garments: names() });
+        }
+        sim.step().map_err(|source| GarmentError::SewingDiverged {
+            garments: names(),
             source,
         })?;
         steps += 1;

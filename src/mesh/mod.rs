@@ -25,7 +25,10 @@ pub struct TriMeshData {
 /// Why a mesh file could not be used; always carries the file path.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("mesh {path}: cannot read file: {source}")]
+    /// A regular file, within the mesh size cap, is required (see `crate::input`).
+    #[error(transparent)]
+    Input(Box<crate::input::InputError>),
+    #[error("mesh {path}: cannot read file")]
     Io {
         path: PathBuf,
         #[source]
@@ -35,6 +38,18 @@ pub enum MeshError {
     UnsupportedFormat { path: PathBuf },
     #[error("mesh {path}: {message}")]
     Malformed { path: PathBuf, message: String },
+    #[error("mesh {path}: not a valid OBJ file")]
+    Obj {
+        path: PathBuf,
+        #[source]
+        source: tobj::LoadError,
+    },
+    #[error("mesh {path}: not a valid ASCII STL file")]
+    AsciiStl {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     #[error("mesh {path}: contains no triangles")]
     Empty { path: PathBuf },
     #[error(
@@ -64,6 +79,9 @@ impl MeshError {
 /// Loads a mesh, dispatching on the (case-insensitive) extension, and multiplies every vertex
 /// by `scale` component-wise. A scale with an odd number of negative components mirrors the
 /// mesh, so triangle winding is flipped to keep outward normals outward.
+///
+/// The file is read through [`crate::input::read_bytes`] (regular files only, size cap). Callers
+/// that take the path from outside check where it points first (see [`load_mesh_within`]).
 pub fn load_mesh(path: &Path, scale: Vec3) -> Result<TriMeshData, MeshError> {
     if !scale.is_finite() || scale.x == 0.0 || scale.y == 0.0 || scale.z == 0.0 {
         return Err(MeshError::BadScale {
@@ -77,9 +95,9 @@ pub fn load_mesh(path: &Path, scale: Vec3) -> Result<TriMeshData, MeshError> {
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     let read = || {
-        std::fs::read(path).map_err(|source| MeshError::Io {
-            path: path.to_path_buf(),
-            source,
+        crate::input::read_bytes(path, crate::input::InputKind::Mesh).map_err(|e| match e {
+            crate::input::InputError::Open { path, source, .. } => MeshError::Io { path, source },
+            other => MeshError::Input(Box::new(other)),
         })
     };
     let mut mesh = match ext.as_str() {
@@ -102,6 +120,20 @@ pub fn load_mesh(path: &Path, scale: Vec3) -> Result<TriMeshData, MeshError> {
     }
     validate(path, &mesh)?;
     Ok(mesh)
+}
+
+/// [`load_mesh`] of a path from a scene file, after resolving it (symlinks, `..`) and checking
+/// that it lies inside one of `roots` (see `crate::robot::resolve` for the rule).
+pub fn load_mesh_within(
+    path: &Path,
+    scale: Vec3,
+    roots: &[PathBuf],
+) -> Result<TriMeshData, MeshError> {
+    let resolved = crate::input::contained(path, roots).map_err(|e| match e {
+        crate::input::InputError::Open { path, source, .. } => MeshError::Io { path, source },
+        other => MeshError::Input(Box::new(other)),
+    })?;
+    load_mesh(&resolved, scale)
 }
 
 /// Checks the invariants every consumer relies on: at least one triangle, indices in range,

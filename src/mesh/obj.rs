@@ -15,7 +15,10 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
         Err(tobj::LoadError::OpenFileFailed)
     })
-    .map_err(|e| MeshError::malformed(path, format!("OBJ: {e}")))?;
+    .map_err(|source| MeshError::Obj {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut mesh = TriMeshData::default();
     for model in &models {
         let m = &model.mesh;

@@ -72,8 +72,10 @@ pub(super) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
 
 fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
     let mut cursor = std::io::Cursor::new(bytes);
-    let indexed = stl_io::read_stl(&mut cursor)
-        .map_err(|e| MeshError::malformed(path, format!("ASCII STL: {e}")))?;
+    let indexed = stl_io::read_stl(&mut cursor).map_err(|source| MeshError::AsciiStl {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let vertices = indexed
         .vertices
         .iter()

@@ -1,5 +1,13 @@
 //! Mesh URI resolution: `package://`, `file://` and plain paths, the way ROS tools and
-//! pybullet find meshes, without ever letting a `package://` URI leave its package.
+//! pybullet find meshes, and the one rule for where a mesh may come from.
+//!
+//! **Where meshes may come from.** After resolution, every mesh reference (whatever its form:
+//! `package://`, `file://`, relative or absolute, through any symlinks) is resolved to its real
+//! path and must lie inside one of [`allowed_roots`]: the URDF's package tree (the URDF's folder,
+//! or the ancestor that is the package: it holds a `package.xml` or bears the package's name),
+//! the package folders the user configured (`search_paths`, `ROS_PACKAGE_PATH`,
+//! `AMENT_PREFIX_PATH`), and the caller's extra roots (the scene's folder and its
+//! `mesh_paths` allow-list). The check runs before the mesh is opened.
 
 use std::path::{Component, Path, PathBuf};
 
@@ -101,6 +109,45 @@ fn package_dirs(pkg: &str, urdf_dir: Option<&Path>, paths: &SearchPaths) -> Vec<
     dirs
 }
 
+/// How many folders above the URDF's own a package root is looked for (`pkg/urdf/x.urdf`).
+const PACKAGE_LEVELS: usize = 3;
+
+/// The folders a mesh referenced by `uri` from a URDF in `urdf_dir` may lie in (see the module
+/// doc); `extra` are the caller's roots (scene folder, allow-list).
+pub fn allowed_roots(
+    uri: &str,
+    urdf_dir: Option<&Path>,
+    paths: &SearchPaths,
+    extra: &[PathBuf],
+) -> Vec<PathBuf> {
+    let mut roots: Vec<PathBuf> = extra.to_vec();
+    let pkg = uri
+        .trim()
+        .strip_prefix("package://")
+        .and_then(|r| r.split_once('/'))
+        .map(|(p, _)| p);
+    if let Some(dir) = urdf_dir {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        roots.push(dir.to_path_buf());
+        let canonical = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+        for a in canonical.ancestors().skip(1).take(PACKAGE_LEVELS) {
+            let named = pkg.is_some_and(|p| a.file_name().is_some_and(|n| n == p));
+            if named || a.join("package.xml").is_file() {
+                roots.push(a.to_path_buf());
+                break;
+            }
+        }
+    }
+    roots.extend(paths.extra.iter().cloned());
+    roots.extend(paths.ros_package_path.iter().cloned());
+    roots.extend(paths.ament_prefixes.iter().map(|p| p.join("share")));
+    roots
+}
+
 /// Resolves a URDF mesh `filename` to an existing file.
 pub fn resolve_uri(
     uri: &str,
@@ -119,7 +166,9 @@ pub fn resolve_uri(
         let mut tried = Vec::new();
         for d in package_dirs(pkg, urdf_dir, paths) {
             let p = d.join(&inner);
-            if p.is_file() {
+            // Anything but a folder counts as found: `crate::input` then refuses what is not a
+            // regular file with a clear error (a FIFO, a device) instead of "not found".
+            if p.exists() && !p.is_dir() {
                 return Ok(p);
             }
             tried.push(p);
@@ -140,7 +189,7 @@ pub fn resolve_uri(
         Some(d) if path.is_relative() => d.join(path),
         _ => path.to_path_buf(),
     };
-    if candidate.is_file() {
+    if candidate.exists() && !candidate.is_dir() {
         Ok(candidate)
     } else {
         Err(ResolveError::NotFound(vec![candidate]))

@@ -2,8 +2,9 @@
 //! geometry (optionally falling back to visual geometry) with meshes resolved and loaded.
 
 use super::kinematics::{JointKind, JointSpec, Kinematics, TreeError, MAX_LENGTH};
-use super::resolve::{resolve_uri, ResolveError, SearchPaths};
+use super::resolve::{allowed_roots, resolve_uri, ResolveError, SearchPaths};
 use super::{Geometry, Robot};
+use crate::input::{InputError, InputKind};
 use crate::mesh::{load_mesh, MeshError, TriMeshData};
 use crate::{Pose, Vec3};
 use std::collections::HashMap;
@@ -19,6 +20,9 @@ pub struct UrdfOptions {
     pub search_paths: Vec<PathBuf>,
     /// Also search `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`.
     pub use_ros_env: bool,
+    /// Folders meshes may also come from besides the URDF's package tree and the search paths
+    /// (the scene's folder and its `mesh_paths`); see [`super::resolve`].
+    pub mesh_roots: Vec<PathBuf>,
 }
 
 impl Default for UrdfOptions {
@@ -27,26 +31,52 @@ impl Default for UrdfOptions {
             visual_fallback: false,
             search_paths: Vec::new(),
             use_ros_env: true,
+            mesh_roots: Vec::new(),
         }
     }
 }
 
+/// Deepest element nesting accepted in a URDF (real ones nest about five deep); checked by a
+/// streaming pass before the recursive parser sees the text.
+pub const MAX_XML_DEPTH: usize = 64;
+
 /// Why a robot description could not be loaded; names the file, link or joint at fault.
+/// The cause, if any, is the `source()`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RobotError {
-    #[error("cannot read URDF {path}: {source}")]
-    Read {
-        path: PathBuf,
+    /// The URDF file could not be read (missing, not a regular file, too large, not UTF-8).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error("{origin}: not a valid URDF")]
+    Parse {
+        origin: String,
         #[source]
-        source: std::io::Error,
+        source: urdf_rs::UrdfError,
     },
-    #[error("invalid URDF {origin}: {message}")]
-    Parse { origin: String, message: String },
-    #[error("URDF {origin}: {source}")]
+    #[error("{origin}: not well-formed XML")]
+    Xml {
+        origin: String,
+        #[source]
+        source: quick_xml::Error,
+    },
+    #[error("{origin}: XML nested deeper than {max} elements")]
+    TooDeep { origin: String, max: usize },
+    #[error("{origin}: root element is <{found}>, expected <robot>")]
+    Root { origin: String, found: String },
+    #[error("{origin}: invalid kinematic tree")]
     Tree {
         origin: String,
         #[source]
         source: TreeError,
+    },
+    #[error("{origin}: joint `{joint}`: mimic {what} must be finite and at most {max:e} in size (got {value:e})")]
+    BadMimic {
+        origin: String,
+        joint: String,
+        what: &'static str,
+        value: f64,
+        max: f64,
     },
     #[error("link `{link}`: mesh `{uri}` not found; tried: {}", display_paths(.tried))]
     MeshNotFound {
@@ -56,16 +86,31 @@ pub enum RobotError {
     },
     #[error("link `{link}`: mesh `{uri}` escapes its package directory")]
     PackageEscape { link: String, uri: String },
-    #[error("link `{link}`: {message}")]
-    UnsupportedUri { link: String, message: String },
-    #[error("link `{link}`: {source}")]
+    #[error("link `{link}`: mesh `{uri}`: unsupported URI")]
+    UnsupportedUri { link: String, uri: String },
+    /// The mesh resolved (through `..` or a symlink) outside the folders meshes may come from.
+    #[error("link `{link}`: mesh `{uri}` is outside the allowed folders")]
+    MeshOutside {
+        link: String,
+        uri: String,
+        #[source]
+        source: Box<InputError>,
+    },
+    #[error("link `{link}`: mesh {}", .path.display())]
     Mesh {
         link: String,
+        path: PathBuf,
         #[source]
-        source: MeshError,
+        source: Box<MeshError>,
     },
-    #[error("link `{link}`: invalid geometry: {message}")]
-    BadGeometry { link: String, message: String },
+    #[error("link `{link}`: {what} must be positive and at most {MAX_LENGTH:e} m (got {value})")]
+    BadGeometry {
+        link: String,
+        what: String,
+        value: f64,
+    },
+    #[error("link `{link}`: collision origin is not finite or farther than {MAX_LENGTH:e} m")]
+    BadOrigin { link: String },
 }
 
 fn display_paths(paths: &[PathBuf]) -> String {
@@ -79,6 +124,53 @@ fn display_paths(paths: &[PathBuf]) -> String {
         .join(", ")
 }
 
+/// A streaming pass over the XML: nesting depth at most [`MAX_XML_DEPTH`] and a `<robot>` root,
+/// so the recursive parser behind `urdf-rs` can neither overflow the stack nor accept a
+/// misspelled document.
+fn prescan(xml: &str, origin: &str) -> Result<(), RobotError> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(xml);
+    let mut depth = 0usize;
+    let mut root: Option<String> = None;
+    loop {
+        let event = reader.read_event().map_err(|source| RobotError::Xml {
+            origin: origin.to_string(),
+            source,
+        })?;
+        let start = match &event {
+            Event::Start(e) | Event::Empty(e) => Some(e.local_name().as_ref().to_vec()),
+            _ => None,
+        };
+        if let Some(name) = start {
+            if root.is_none() {
+                let name = String::from_utf8_lossy(&name).into_owned();
+                if name != "robot" {
+                    return Err(RobotError::Root {
+                        origin: origin.to_string(),
+                        found: name,
+                    });
+                }
+                root = Some(name);
+            }
+        }
+        match event {
+            Event::Start(_) => {
+                depth += 1;
+                if depth > MAX_XML_DEPTH {
+                    return Err(RobotError::TooDeep {
+                        origin: origin.to_string(),
+                        max: MAX_XML_DEPTH,
+                    });
+                }
+            }
+            Event::End(_) => depth = depth.saturating_sub(1),
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 fn to_pose(p: &urdf_rs::Pose) -> Pose {
     Pose::from_xyz_rpy(p.xyz.0, p.rpy.0)
 }
@@ -86,14 +178,7 @@ fn to_pose(p: &urdf_rs::Pose) -> Pose {
 impl Robot {
     /// Loads a URDF file; relative and `package://` mesh paths are also looked up around it.
     pub fn from_urdf_file(path: &Path, options: &UrdfOptions) -> Result<Robot, RobotError> {
-        let bytes = std::fs::read(path).map_err(|source| RobotError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let text = String::from_utf8(bytes).map_err(|e| RobotError::Parse {
-            origin: path.display().to_string(),
-            message: format!("not UTF-8: {e}"),
-        })?;
+        let text = crate::input::read_text(path, InputKind::Urdf)?;
         let dir = path.parent().map(|d| {
             if d.as_os_str().is_empty() {
                 Path::new(".")
@@ -113,6 +198,17 @@ impl Robot {
     ) -> Result<Robot, RobotError> {
         build(xml, "<string>", base_dir, options)
     }
+
+    /// [`Robot::from_urdf_str`] with the name errors should start with (e.g. the file the text
+    /// was read from).
+    pub fn from_urdf_named(
+        xml: &str,
+        origin: &str,
+        base_dir: Option<&Path>,
+        options: &UrdfOptions,
+    ) -> Result<Robot, RobotError> {
+        build(xml, origin, base_dir, options)
+    }
 }
 
 fn build(
@@ -121,11 +217,13 @@ fn build(
     dir: Option<&Path>,
     options: &UrdfOptions,
 ) -> Result<Robot, RobotError> {
-    let xml = xml.trim_end_matches(['\0', ' ', '\n', '\r', '\t']);
-    let urdf = urdf_rs::read_from_string(xml).map_err(|e| RobotError::Parse {
+    let xml = crate::input::strip_bom(xml).trim_end_matches(['\0', ' ', '\n', '\r', '\t']);
+    prescan(xml, origin)?;
+    let urdf = urdf_rs::read_from_string(xml).map_err(|source| RobotError::Parse {
         origin: origin.to_string(),
-        message: e.to_string(),
+        source,
     })?;
+    check_mimics(&urdf, origin)?;
     let links: Vec<String> = urdf.links.iter().map(|l| l.name.clone()).collect();
     let specs = urdf
         .joints
@@ -189,12 +287,11 @@ fn build(
         for (o, g) in elems {
             let pose = to_pose(o);
             if !pose.is_finite() || pose.translation.length() > MAX_LENGTH {
-                return Err(RobotError::BadGeometry {
+                return Err(RobotError::BadOrigin {
                     link: link.name.clone(),
-                    message: format!("origin is not finite or farther than {MAX_LENGTH:e} m"),
                 });
             }
-            let geometry = convert_geometry(&link.name, g, dir, &search, &mut cache)?;
+            let geometry = convert_geometry(&link.name, g, dir, &search, options, &mut cache)?;
             shapes.push((pose, geometry));
         }
         collision.push(shapes);
@@ -206,13 +303,40 @@ fn build(
     })
 }
 
+/// Largest mimic multiplier and offset accepted: a mimic maps a joint range of a few radians
+/// or metres onto another; beyond this it is a typo or an attack on f64 headroom.
+pub const MAX_MIMIC: f64 = 1e3;
+
+/// Mimic multipliers and offsets must be finite and plausible (`nan` would record NaN joint
+/// states and `/tf` rotations).
+fn check_mimics(urdf: &urdf_rs::Robot, origin: &str) -> Result<(), RobotError> {
+    for j in &urdf.joints {
+        let Some(m) = &j.mimic else { continue };
+        for (what, v) in [("multiplier", m.multiplier), ("offset", m.offset)] {
+            if let Some(value) = v {
+                if !value.is_finite() || value.abs() > MAX_MIMIC {
+                    return Err(RobotError::BadMimic {
+                        origin: origin.to_string(),
+                        joint: j.name.clone(),
+                        what,
+                        value,
+                        max: MAX_MIMIC,
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn positive(link: &str, what: &str, v: f64) -> Result<f64, RobotError> {
     if v.is_finite() && v > 0.0 && v <= MAX_LENGTH {
         Ok(v)
     } else {
         Err(RobotError::BadGeometry {
             link: link.to_string(),
-            message: format!("{what} must be positive and at most {MAX_LENGTH:e} m, got {v}"),
+            what: what.to_string(),
+            value: v,
         })
     }
 }
@@ -222,6 +346,7 @@ fn convert_geometry(
     g: &urdf_rs::Geometry,
     dir: Option<&Path>,
     search: &SearchPaths,
+    options: &UrdfOptions,
     cache: &mut HashMap<(PathBuf, [u64; 3]), Arc<TriMeshData>>,
 ) -> Result<Geometry, RobotError> {
     Ok(match g {
@@ -255,10 +380,19 @@ fn convert_geometry(
                     link: link.to_string(),
                     uri: filename.clone(),
                 },
-                ResolveError::Unsupported(message) => RobotError::UnsupportedUri {
+                ResolveError::Unsupported(_) => RobotError::UnsupportedUri {
                     link: link.to_string(),
-                    message,
+                    uri: filename.clone(),
                 },
+            })?;
+            // Resolved (symlinks, `..`) and checked against the allowed folders before opening.
+            let roots = allowed_roots(filename, dir, search, &options.mesh_roots);
+            let path = crate::input::contained(&path, &roots).map_err(|source| {
+                RobotError::MeshOutside {
+                    link: link.to_string(),
+                    uri: filename.clone(),
+                    source: Box::new(source),
+                }
             })?;
             let scale = Vec3::from(scale.as_ref().map(|s| s.0).unwrap_or([1.0; 3]));
             let key = (path.clone(), scale.to_array().map(f64::to_bits));
@@ -267,7 +401,8 @@ fn convert_geometry(
             }
             let mesh = Arc::new(load_mesh(&path, scale).map_err(|source| RobotError::Mesh {
                 link: link.to_string(),
-                source,
+                path: path.clone(),
+                source: Box::new(source),
             })?);
             cache.insert(key, mesh.clone());
             Geometry::Mesh(mesh)

@@ -1,6 +1,11 @@
 //! Offline recording: runs a simulation for a duration and writes the cloth at the scene's
 //! publish rate to a rosbag2 MCAP file. The file is always finished, also on a stop request
 //! (Ctrl-C) and on a simulation error, so it is never left unreadable.
+//!
+//! The output is never one of the run's inputs (scene, URDF, meshes, joints bag: compared by
+//! device and inode, so symlinks and hard links count), it is written to a temporary file beside
+//! it and renamed into place when finished, and no non-finite value is ever written: a frame
+//! with one stops the run with an error naming it.
 
 use crate::robot::RobotDriver;
 use crate::ros::msg::{
@@ -12,7 +17,7 @@ use crate::ros::{
     Reliability, TopicId,
 };
 use crate::sim::{DivergenceError, Simulation};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How to record.
@@ -54,18 +59,79 @@ pub struct RecordSummary {
     pub interrupted: bool,
 }
 
+/// Why a recording failed; each names the output file or what went wrong in the run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RecordError {
     #[error(transparent)]
     Bag(#[from] BagError),
     /// The simulation diverged; the bag holds everything up to the last good frame.
-    #[error("{error} (the bag was finished with {frames} frames before the failure)")]
+    #[error(
+        "the simulation diverged (the bag was finished with {frames} frames before the failure)"
+    )]
     Diverged {
+        #[source]
         error: Box<DivergenceError>,
         frames: u64,
     },
-    #[error("invalid recording option: {0}")]
-    Options(String),
+    #[error("duration must be finite and > 0 (got {value})")]
+    Duration { value: f64 },
+    #[error("publish rate must be finite and > 0 (got {value})")]
+    PublishRate { value: f64 },
+    /// `--out` names a file the run reads (the same file by device and inode).
+    #[error("{}: is the {kind} this run reads ({}); refusing to overwrite it", .out.display(), .input.display())]
+    OntoInput {
+        out: PathBuf,
+        input: PathBuf,
+        kind: crate::input::InputKind,
+    },
+    #[error("{}: is a directory", .out.display())]
+    OutIsDirectory { out: PathBuf },
+    /// A value about to be written is NaN or infinite; the run stops instead.
+    #[error("{}: {what} {index} is not finite at t = {time} s; stopped (the bag was finished with {frames} frames before it)", .out.display())]
+    NonFinite {
+        out: PathBuf,
+        what: &'static str,
+        index: usize,
+        time: f64,
+        frames: u64,
+    },
+    #[error("{}: cannot move the finished bag into place from {}", .out.display(), .from.display())]
+    Rename {
+        out: PathBuf,
+        from: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// Where the bag is written while recording: a hidden file beside `out`, renamed at the end;
+/// or `out` itself when it is an existing device or FIFO (a stream, e.g. `/dev/stdout`).
+fn staging_path(out: &Path) -> Result<Option<PathBuf>, RecordError> {
+    if let Some(input) = crate::input::is_an_input(out) {
+        return Err(RecordError::OntoInput {
+            out: out.to_path_buf(),
+            input: input.path,
+            kind: input.kind,
+        });
+    }
+    match std::fs::metadata(out) {
+        Ok(m) if m.is_dir() => {
+            return Err(RecordError::OutIsDirectory {
+                out: out.to_path_buf(),
+            })
+        }
+        Ok(m) if !m.is_file() => return Ok(None),
+        _ => {}
+    }
+    let name = out.file_name().map_or_else(
+        || std::ffi::OsString::from("bag"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut tmp = std::ffi::OsString::from(".");
+    tmp.push(&name);
+    tmp.push(format!(".partial-{}", std::process::id()));
+    Ok(Some(out.with_file_name(tmp)))
 }
 
 struct Topics {
@@ -99,18 +165,57 @@ pub fn record_with_robot(
     mut progress: impl FnMut(f64),
 ) -> Result<RecordSummary, RecordError> {
     if !(opts.duration.is_finite() && opts.duration > 0.0) {
-        return Err(RecordError::Options(format!(
-            "duration must be > 0 (got {})",
-            opts.duration
-        )));
+        return Err(RecordError::Duration {
+            value: opts.duration,
+        });
     }
     if !(opts.publish_rate.is_finite() && opts.publish_rate > 0.0) {
-        return Err(RecordError::Options(format!(
-            "publish rate must be > 0 (got {})",
-            opts.publish_rate
-        )));
+        return Err(RecordError::PublishRate {
+            value: opts.publish_rate,
+        });
     }
-    let mut bag = BagWriter::create(out)?;
+    let staging = staging_path(out)?;
+    let target = staging.as_deref().unwrap_or(out);
+    let mut bag = BagWriter::create(target).map_err(|e| match e {
+        // Name the file the user asked for, not the staging file beside it.
+        BagError::Create { source, .. } => BagError::Create {
+            path: out.to_path_buf(),
+            source,
+        },
+        other => other,
+    })?;
+    let result = record_into(sim, driver, &mut bag, out, opts, stop, &mut progress);
+    // Finish the file whatever happened; a finish error wins only if the run itself succeeded.
+    let finished = bag.finish();
+    let moved = match &staging {
+        Some(tmp) if finished.is_ok() => {
+            std::fs::rename(tmp, out).map_err(|source| RecordError::Rename {
+                out: out.to_path_buf(),
+                from: tmp.clone(),
+                source,
+            })
+        }
+        Some(tmp) => {
+            let _ = std::fs::remove_file(tmp);
+            Ok(())
+        }
+        None => Ok(()),
+    };
+    let summary = result?;
+    finished?;
+    moved?;
+    Ok(summary)
+}
+
+fn record_into(
+    sim: &mut Simulation,
+    driver: Option<&mut RobotDriver>,
+    bag: &mut BagWriter,
+    out: &Path,
+    opts: &RecordOptions,
+    stop: &AtomicBool,
+    progress: &mut impl FnMut(f64),
+) -> Result<RecordSummary, RecordError> {
     let mut topics = Topics {
         mesh: bag.add_topic::<Marker>(&format!("{}/mesh", opts.topic_prefix), opts.distro, None)?,
         points: bag.add_topic::<PointCloud2>(
@@ -136,18 +241,15 @@ pub fn record_with_robot(
             bag.add_topic::<TFMessage>("/tf", opts.distro, None)?,
         ));
     }
-    let result = run(sim, driver, &mut bag, &topics, opts, stop, &mut progress);
-    // Finish the file whatever happened; a finish error wins only if the run itself succeeded.
-    let finished = bag.finish();
-    let summary = result?;
-    finished?;
-    Ok(summary)
+    run(sim, driver, bag, out, &topics, opts, stop, progress)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run(
     sim: &mut Simulation,
     mut driver: Option<&mut RobotDriver>,
     bag: &mut BagWriter,
+    out: &Path,
     topics: &Topics,
     opts: &RecordOptions,
     stop: &AtomicBool,
@@ -157,9 +259,17 @@ fn run(
     let period = 1.0 / opts.publish_rate;
     let t_end = sim.time() + opts.duration;
     let eps = 1e-9 * sim.settings.dt;
-    write_frame(sim, driver.as_deref(), bag, topics, opts)?;
+    let start = sim.time();
+    let frame = |sim: &Simulation, driver: Option<&RobotDriver>, bag: &mut BagWriter, n: u64| {
+        check_finite(sim, driver, out, n)?;
+        write_frame(sim, driver, bag, topics, opts).map_err(RecordError::from)
+    };
+    frame(sim, driver.as_deref(), bag, 0)?;
     s.frames_written += 1;
-    let mut next_publish = sim.time() + period;
+    // Publish instants are start + k * period, k counted (not summed, which stalls when the
+    // period is below the time's resolution); the step count is bounded by the scene's checks.
+    let mut k: f64 = 1.0;
+    let mut next_publish = start + period;
     while sim.time() + eps < t_end {
         if stop.load(Ordering::Relaxed) {
             s.interrupted = true;
@@ -175,17 +285,48 @@ fn run(
         s.steps += 1;
         s.subdivisions += m.subdivisions as u64;
         if sim.time() + eps >= next_publish {
-            write_frame(sim, driver.as_deref(), bag, topics, opts)?;
+            frame(sim, driver.as_deref(), bag, s.frames_written)?;
             s.frames_written += 1;
             // Skip publish instants a long frame step jumped over rather than bunching them.
-            while next_publish <= sim.time() + eps {
-                next_publish += period;
-            }
+            k = (((sim.time() + eps - start) / period).floor() + 1.0).max(k + 1.0);
+            next_publish = start + k * period;
         }
         progress(sim.time());
     }
     s.simulated_seconds = sim.time();
     Ok(s)
+}
+
+/// Refuses a frame with a NaN or infinite value: cloth positions, joint positions, link poses.
+fn check_finite(
+    sim: &Simulation,
+    driver: Option<&RobotDriver>,
+    out: &Path,
+    frames: u64,
+) -> Result<(), RecordError> {
+    let err = |what, index| RecordError::NonFinite {
+        out: out.to_path_buf(),
+        what,
+        index,
+        time: sim.time(),
+        frames,
+    };
+    if let Some(i) = sim.cloth.x.iter().position(|v| !v.is_finite()) {
+        return Err(err("cloth vertex", i));
+    }
+    if let Some(d) = driver {
+        let kin = d.robot().kinematics();
+        let q = d.joint_positions();
+        for (ji, j) in kin.joints().iter().enumerate() {
+            if j.kind.is_scalar() && !kin.effective_position(q, ji).0.is_finite() {
+                return Err(err("joint", ji));
+            }
+        }
+        if let Some(l) = d.link_poses().iter().position(|p| !p.is_finite()) {
+            return Err(err("link pose", l));
+        }
+    }
+    Ok(())
 }
 
 fn write_frame(

@@ -73,7 +73,7 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         }
         for (k, a) in c.attach.iter().enumerate() {
             let frame = frames.index(&a.frame).ok_or_else(|| SceneError::Invalid {
-                origin: scene.name.clone(),
+                origin: scene.origin().to_string(),
                 key: format!("cloths[{ci}].attach[{k}].frame"),
                 reason: format!("no frame named '{}'", a.frame),
             })?;
@@ -132,7 +132,7 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
 
 fn invalid(scene: &Scene, key: String, reason: String) -> SceneError {
     SceneError::Invalid {
-        origin: scene.name.clone(),
+        origin: scene.origin().to_string(),
         key,
         reason,
     }
@@ -141,27 +141,23 @@ fn invalid(scene: &Scene, key: String, reason: String) -> SceneError {
 /// Loads the URDF (relative to the scene file) and checks the trajectory's joint names against it.
 fn load_robot(scene: &Scene, r: &RobotSpec) -> Result<RobotDriver, SceneError> {
     let path = scene.base_dir.clone().unwrap_or_default().join(&r.urdf);
+    let robot_error = |source| SceneError::Robot {
+        origin: scene.origin().to_string(),
+        source: Box::new(source),
+    };
     let text = match &scene.robot_urdf_text {
         Some(text) => text.clone(),
-        None => std::fs::read_to_string(&path).map_err(|e| {
-            invalid(
-                scene,
-                "robot.urdf".into(),
-                format!("cannot read {}: {e}", path.display()),
-            )
-        })?,
+        None => crate::input::read_text(&path, crate::input::InputKind::Urdf)
+            .map_err(|e| robot_error(e.into()))?,
     };
     let options = UrdfOptions {
         visual_fallback: r.visual_fallback,
+        mesh_roots: scene.mesh_roots(),
         ..UrdfOptions::default()
     };
-    let robot = Robot::from_urdf_str(&text, path.parent(), &options).map_err(|e| {
-        invalid(
-            scene,
-            "robot.urdf".into(),
-            format!("{}: {e}", path.display()),
-        )
-    })?;
+    let origin = path.display().to_string();
+    let robot =
+        Robot::from_urdf_named(&text, &origin, path.parent(), &options).map_err(robot_error)?;
     let source = match &r.trajectory {
         Some(tr) => {
             tr.validate(robot.kinematics())
@@ -311,13 +307,15 @@ fn build_collision(
     cloth: &Cloth,
     driver: Option<&mut RobotDriver>,
 ) -> Result<CollisionStage, SceneError> {
-    let origin = || scene.name.clone();
+    let origin = || scene.origin().to_string();
     let base = scene.base_dir.clone().unwrap_or_default();
+    let roots = scene.mesh_roots();
     let mut obstacles = Vec::with_capacity(scene.obstacles.len());
     for (i, spec) in scene.obstacles.iter().enumerate() {
         let o = spec
             .build(|path: &str| {
-                crate::mesh::load_mesh(&base.join(path), Vec3::ONE).map(|m| (m.vertices, m.indices))
+                crate::mesh::load_mesh_within(&base.join(path), Vec3::ONE, &roots)
+                    .map(|m| (m.vertices, m.indices))
             })
             .map_err(|e| SceneError::Invalid {
                 origin: origin(),

@@ -13,6 +13,8 @@
 mod build;
 mod validate;
 
+pub use validate::{Problem, MAX_VERTICES};
+
 pub use build::{build, build_with_robot};
 
 use crate::cloth::{GridRegion, Material};
@@ -272,6 +274,14 @@ pub struct Scene {
     /// meshes are still resolved against `robot.urdf`'s folder.
     #[serde(skip)]
     pub robot_urdf_text: Option<String>,
+    /// Where the scene came from (its file), for errors; set by [`Scene::from_yaml`].
+    #[serde(skip)]
+    pub origin: String,
+    /// Extra folders (relative to the scene's folder, or absolute) mesh files may be read from,
+    /// besides the scene's folder and the URDF's package. Every mesh reference (`package://`,
+    /// `file://`, relative, through symlinks) must resolve inside one of them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mesh_paths: Vec<PathBuf>,
 }
 
 /// `robot: { urdf: bot.urdf, trajectory: {names, points}, visual_fallback, attach: [..] }`.
@@ -360,16 +370,37 @@ fn gravity() -> [f64; 3] {
     [0.0, 0.0, -9.81]
 }
 
-/// A scene that could not be read or makes no sense; says where and why.
+/// A scene that could not be read or makes no sense. Every message starts with the scene's
+/// file (or the origin given to [`Scene::from_yaml`]), then the key path; the cause, if any, is
+/// the error's `source()`, printed once by the command line.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SceneError {
-    #[error("cannot read scene file {path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
+    /// The file could not be read (missing, not a regular file, too large, not UTF-8).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
+    /// Not YAML, or not a scene (unknown key, wrong type); the YAML error gives the place.
+    #[error("{origin}: not a valid scene")]
+    Parse {
+        origin: String,
+        #[source]
+        source: serde_yaml_ng::Error,
     },
-    #[error("{origin}: {message}")]
-    Parse { origin: String, message: String },
+    /// Flow collections nested deeper than the parser can take in linear time.
+    #[error("{origin}: line {line}: YAML nested deeper than {max} levels")]
+    TooDeep {
+        origin: String,
+        line: usize,
+        max: usize,
+    },
+    /// A value that makes the run meaningless or unbounded.
+    #[error("{origin}: {key}: {problem}")]
+    Value {
+        origin: String,
+        key: String,
+        problem: Box<Problem>,
+    },
+    /// A problem found while building (a name the URDF lacks, an obstacle that cannot be made).
     #[error("{origin}: {key}: {reason}")]
     Invalid {
         origin: String,
@@ -383,33 +414,84 @@ pub enum SceneError {
         #[source]
         source: Box<crate::garment::GarmentError>,
     },
+    /// The scene's robot could not be loaded.
+    #[error("{origin}: robot.urdf")]
+    Robot {
+        origin: String,
+        #[source]
+        source: Box<crate::robot::RobotError>,
+    },
+}
+
+impl SceneError {
+    /// The key path of the value at fault, if the error has one.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            SceneError::Value { key, .. } | SceneError::Invalid { key, .. } => Some(key),
+            SceneError::Robot { .. } => Some("robot.urdf"),
+            SceneError::Garment { .. } => Some("garments"),
+            _ => None,
+        }
+    }
 }
 
 impl Scene {
-    /// Parses and validates a scene from YAML text; `origin` names it in errors.
+    /// Parses and validates a scene from YAML text; `origin` names it in errors (the file
+    /// path when loaded with [`Scene::load`]). A leading byte-order mark is ignored.
     pub fn from_yaml(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = serde_yaml_ng::from_str(text).map_err(|e| SceneError::Parse {
+        let text = crate::input::strip_bom(text);
+        crate::input::check_yaml_depth(text).map_err(|line| SceneError::TooDeep {
             origin: origin.to_string(),
-            message: e.to_string(),
+            line,
+            max: crate::input::MAX_YAML_DEPTH,
         })?;
+        let mut scene: Scene =
+            serde_yaml_ng::from_str(text).map_err(|source| SceneError::Parse {
+                origin: origin.to_string(),
+                source,
+            })?;
+        scene.origin = origin.to_string();
         scene
             .validate()
-            .map_err(|(key, reason)| SceneError::Invalid {
+            .map_err(|(key, problem)| SceneError::Value {
                 origin: origin.to_string(),
                 key,
-                reason,
+                problem: Box::new(problem),
             })?;
         Ok(scene)
     }
 
+    /// Reads a scene file through [`crate::input`] (a regular file, at most
+    /// [`crate::input::InputKind::Scene`]'s cap) and validates it.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::Scene)?;
         let mut scene = Self::from_yaml(&text, &path.display().to_string())?;
-        scene.base_dir = path.parent().map(Path::to_path_buf);
+        scene.base_dir = path.parent().map(|d| {
+            if d.as_os_str().is_empty() {
+                Path::new(".").to_path_buf()
+            } else {
+                d.to_path_buf()
+            }
+        });
         Ok(scene)
+    }
+
+    /// Where this scene came from, for errors: its file, or the origin given to `from_yaml`.
+    pub fn origin(&self) -> &str {
+        if self.origin.is_empty() {
+            "<scene>"
+        } else {
+            &self.origin
+        }
+    }
+
+    /// Folders mesh files may come from besides the URDF's package: the scene's folder and the
+    /// scene's `mesh_paths` (relative to the scene's folder).
+    pub fn mesh_roots(&self) -> Vec<PathBuf> {
+        let base = self.base_dir.clone().unwrap_or_else(|| PathBuf::from("."));
+        let mut roots = vec![base.clone()];
+        roots.extend(self.mesh_paths.iter().map(|p| base.join(p)));
+        roots
     }
 
     /// Whether this scene needs a collision stage at all.

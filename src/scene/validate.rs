@@ -1,138 +1,263 @@
-//! Scene validation: every number that could make the run meaningless is checked here, with the
-//! key path in the error (`cloths[0].material.stretch: must be > 0`).
+//! Scene validation: one pass over every number of the scene file, before anything is built.
+//! Each must be finite and inside a range that makes physical and computational sense, also
+//! relative to the others (the step against the run's length, the publish rate against the
+//! step, the number of steps and loop iterations one value can cause), so that no single value
+//! can make a run hang, overflow f64 or silently do nothing. Errors carry the key path
+//! (`cloths[0].material.stretch`) and a typed [`Problem`].
 
 use super::{EffectKind, Scene, Selection};
+use crate::collide::spec::{MotionSpec, ObstacleSpec, PoseSpec, ShapeSpec};
 
-type Invalid = (String, String);
-
-fn positive(key: String, v: f64) -> Result<(), Invalid> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err((key, format!("must be > 0 (got {v})")))
-    }
+/// What is wrong with one value of the scene.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Problem {
+    #[error("must be finite (got {value})")]
+    NotFinite { value: f64 },
+    #[error("must be > 0 (got {value})")]
+    NotPositive { value: f64 },
+    #[error("must be >= 0 (got {value})")]
+    Negative { value: f64 },
+    #[error("must be at most {max:e}{unit} (got {value:e})")]
+    TooLarge {
+        value: f64,
+        max: f64,
+        unit: &'static str,
+    },
+    #[error("must be at least {min:e}{unit} (got {value:e})")]
+    TooSmall {
+        value: f64,
+        min: f64,
+        unit: &'static str,
+    },
+    #[error("must be in {min}..={max} (got {value})")]
+    CountOutOfRange { value: u64, min: u64, max: u64 },
+    #[error("{dt} s step is longer than the {duration} s run")]
+    StepLongerThanRun { dt: f64, duration: f64 },
+    #[error(
+        "{duration} s at {dt} s x {substeps} substeps is {count:e} substeps, more than {max:e}"
+    )]
+    TooManySteps {
+        duration: f64,
+        dt: f64,
+        substeps: u32,
+        count: f64,
+        max: f64,
+    },
+    #[error("{rate:e} Hz for {duration} s is more than {max:e} frames")]
+    TooManyFrames { rate: f64, duration: f64, max: f64 },
+    #[error("times must increase ({value} after {previous})")]
+    NotIncreasing { value: f64, previous: f64 },
+    #[error("{name:?} is listed twice")]
+    Duplicate { name: String },
+    #[error("the effect list names wind but there is no wind section")]
+    WindMissing,
+    #[error("a scene needs at least one cloth")]
+    NoCloth,
+    #[error("a scene with garments cannot also have grid cloths")]
+    GarmentsAndCloths,
+    #[error("needs at least {min} vertices each way (got {got:?})")]
+    TooFewVertices { got: [usize; 2], min: usize },
+    #[error("more than {max} vertices")]
+    TooManyVertices { max: usize },
+    #[error("give exactly one of vertex, vertices, region, near")]
+    SelectionForm,
+    #[error("vertex {vertex} out of range (cloth has {count})")]
+    VertexOutOfRange { vertex: u32, count: usize },
+    #[error("no {what} named {name:?}")]
+    Unknown { what: &'static str, name: String },
+    #[error("must not be empty")]
+    Empty,
+    #[error("{found} values for {expected} joint names")]
+    Length { found: usize, expected: usize },
+    #[error(transparent)]
+    Garment(crate::garment::GarmentError),
+    #[error("{message}")]
+    Collision { message: String },
 }
 
-fn non_negative(key: String, v: f64) -> Result<(), Invalid> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err((key, format!("must be >= 0 (got {v})")))
-    }
-}
-
-fn finite3(key: String, v: [f64; 3]) -> Result<(), Invalid> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err((key, "must be finite".into()))
-    }
-}
+type Invalid = (String, Problem);
 
 /// Largest grid accepted (vertices): a typo such as `resolution: [10000, 10000]` must not
 /// allocate gigabytes.
 pub const MAX_VERTICES: usize = 4_000_000;
+/// Largest coordinate, size or distance (m): far inside f64's range, so squared distances,
+/// products with rates and sums over a grid stay finite.
+pub const MAX_LENGTH: f64 = crate::robot::kinematics::MAX_LENGTH;
+/// Largest angle (rad) in a pose: beyond this, `sin`/`cos` of an f64 lose all precision.
+pub const MAX_ANGLE: f64 = 1e6;
+/// Fastest scripted linear motion (m/s) and rotation (rad/s).
+pub const MAX_SPEED: f64 = 1e4;
+/// Strongest gravity (m/s^2): a thousand g.
+pub const MAX_GRAVITY: f64 = 1e4;
+/// Frame step bounds (s): below the lower one a second of simulation takes a million steps;
+/// above the upper one nothing in a cloth is resolved.
+pub const MIN_DT: f64 = 1e-6;
+pub const MAX_DT: f64 = 1.0;
+/// Most frame steps x substeps one run may ask for (`duration / dt * substeps`), and most
+/// frames it may write (`publish_rate * duration`; a frame is written at most once per step).
+pub const MAX_TOTAL_SUBSTEPS: f64 = 1e7;
+/// Longest run (s): about eleven days of simulated time (the substep cap usually binds first).
+pub const MAX_DURATION: f64 = 1e6;
+/// Most inner iterations a setting may ask for per step (CG, collision passes).
+pub const MAX_ITERATIONS: u64 = 100_000;
+/// Material bounds: areal density (kg/m^2), spring stiffness (N/m), bending and twist
+/// rigidity (N m), damping coefficients, friction coefficient.
+pub const MAX_DENSITY: f64 = 1e4;
+pub const MAX_STIFFNESS: f64 = 1e8;
+pub const MAX_RIGIDITY: f64 = 1e4;
+pub const MAX_DAMPING: f64 = 1e6;
+pub const MAX_FRICTION: f64 = 100.0;
+/// Wind: speed (m/s), gust frequency (Hz), air density (kg/m^3), drag coefficient.
+pub const MAX_WIND: f64 = 1e3;
+pub const MAX_FREQUENCY: f64 = 1e4;
+pub const MAX_AIR_DENSITY: f64 = 1e3;
+pub const MAX_DRAG: f64 = 1e3;
+/// Largest time (s) in a key, waypoint or trajectory point.
+pub const MAX_TIME: f64 = 1e9;
+/// Largest joint position in a trajectory (rad or m).
+pub const MAX_JOINT: f64 = 1e6;
+
+fn finite(key: &str, v: f64) -> Result<(), Invalid> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err((key.to_string(), Problem::NotFinite { value: v }))
+    }
+}
+
+/// Finite and `|v| <= max`.
+fn bounded(key: &str, v: f64, max: f64, unit: &'static str) -> Result<(), Invalid> {
+    finite(key, v)?;
+    if v.abs() <= max {
+        Ok(())
+    } else {
+        Err((
+            key.to_string(),
+            Problem::TooLarge {
+                value: v,
+                max,
+                unit,
+            },
+        ))
+    }
+}
+
+fn bounded3(key: &str, v: [f64; 3], max: f64, unit: &'static str) -> Result<(), Invalid> {
+    for (i, x) in v.iter().enumerate() {
+        bounded(&format!("{key}[{i}]"), *x, max, unit)?;
+    }
+    Ok(())
+}
+
+/// In `(0, max]`.
+fn positive(key: &str, v: f64, max: f64, unit: &'static str) -> Result<(), Invalid> {
+    finite(key, v)?;
+    if v <= 0.0 {
+        return Err((key.to_string(), Problem::NotPositive { value: v }));
+    }
+    bounded(key, v, max, unit)
+}
+
+/// In `[0, max]`.
+fn non_negative(key: &str, v: f64, max: f64, unit: &'static str) -> Result<(), Invalid> {
+    finite(key, v)?;
+    if v < 0.0 {
+        return Err((key.to_string(), Problem::Negative { value: v }));
+    }
+    bounded(key, v, max, unit)
+}
+
+fn count(key: &str, v: u64, min: u64, max: u64) -> Result<(), Invalid> {
+    if (min..=max).contains(&v) {
+        Ok(())
+    } else {
+        Err((
+            key.to_string(),
+            Problem::CountOutOfRange { value: v, min, max },
+        ))
+    }
+}
+
+fn pose(key: &str, p: &PoseSpec) -> Result<(), Invalid> {
+    bounded3(&format!("{key}.xyz"), p.xyz, MAX_LENGTH, " m")?;
+    bounded3(&format!("{key}.rpy"), p.rpy, MAX_ANGLE, " rad")
+}
+
+/// Finite, within [`MAX_TIME`], and after `previous`.
+fn time_after(key: &str, t: f64, previous: Option<f64>) -> Result<(), Invalid> {
+    bounded(key, t, MAX_TIME, " s")?;
+    match previous {
+        Some(p) if t <= p => Err((
+            key.to_string(),
+            Problem::NotIncreasing {
+                value: t,
+                previous: p,
+            },
+        )),
+        _ => Ok(()),
+    }
+}
 
 impl Scene {
     pub(super) fn validate(&self) -> Result<(), Invalid> {
-        positive("duration".into(), self.duration)?;
-        positive("publish_rate".into(), self.publish_rate)?;
-        finite3("gravity".into(), self.gravity)?;
-        let s = &self.solver;
-        positive("solver.dt".into(), s.dt)?;
-        if s.substeps == 0 || s.substeps > 100_000 {
-            return Err(("solver.substeps".into(), "must be in 1..=100000".into()));
-        }
-        if !(s.cg_tolerance > 0.0 && s.cg_tolerance < 1.0) {
-            return Err((
-                "solver.cg_tolerance".into(),
-                format!("must be in (0, 1) (got {})", s.cg_tolerance),
-            ));
-        }
-        if s.cg_max_iterations == 0 {
-            return Err(("solver.cg_max_iterations".into(), "must be >= 1".into()));
-        }
-        positive("solver.guard.max_speed".into(), s.guard.max_speed)?;
-        non_negative("solver.guard.energy_growth".into(), s.guard.energy_growth)?;
-        if s.guard.max_subdivisions > 20 {
-            return Err((
-                "solver.guard.max_subdivisions".into(),
-                "must be <= 20".into(),
-            ));
-        }
-        let mut seen = std::collections::HashSet::new();
-        for (i, e) in self.effects.iter().enumerate() {
-            if !seen.insert(*e) {
-                return Err((format!("effects[{i}]"), format!("{e:?} is listed twice")));
-            }
-        }
-        match (&self.wind, self.has(EffectKind::Wind)) {
-            (None, true) => {
-                return Err((
-                    "wind".into(),
-                    "the effect list names wind but there is no wind section".into(),
-                ))
-            }
-            (Some(_), false) => {
-                log::warn!("scene has a wind section but `wind` is not in effects: no wind")
-            }
-            _ => {}
-        }
-        if let Some(w) = &self.wind {
-            finite3("wind.velocity".into(), w.velocity.into())?;
-            positive("wind.air_density".into(), w.air_density)?;
-            non_negative("wind.drag_coefficient".into(), w.drag_coefficient)?;
-            for (k, g) in w.gusts.iter().enumerate() {
-                finite3(format!("wind.gusts[{k}].amplitude"), g.amplitude.into())?;
-                non_negative(format!("wind.gusts[{k}].frequency"), g.frequency)?;
-            }
-            for (k, key) in w.keys.iter().enumerate() {
-                finite3(format!("wind.keys[{k}].velocity"), key.velocity.into())?;
-                if k > 0 && key.t <= w.keys[k - 1].t {
-                    return Err((format!("wind.keys[{k}].t"), "times must increase".into()));
-                }
-            }
-        }
+        self.validate_run()?;
+        self.validate_effects()?;
         let mut names = std::collections::HashSet::new();
         for (i, f) in self.frames.iter().enumerate() {
             if !names.insert(f.name.as_str()) {
                 return Err((
                     format!("frames[{i}].name"),
-                    format!("duplicate frame '{}'", f.name),
+                    Problem::Duplicate {
+                        name: f.name.clone(),
+                    },
                 ));
             }
-            finite3(format!("frames[{i}].pose.xyz"), f.pose.xyz)?;
-            finite3(format!("frames[{i}].pose.rpy"), f.pose.rpy)?;
-            finite3(format!("frames[{i}].linear_velocity"), f.linear_velocity)?;
-            finite3(format!("frames[{i}].angular_velocity"), f.angular_velocity)?;
+            pose(&format!("frames[{i}].pose"), &f.pose)?;
+            let k = |f: &str| format!("frames[{i}].{f}");
+            bounded3(&k("linear_velocity"), f.linear_velocity, MAX_SPEED, " m/s")?;
+            bounded3(
+                &k("angular_velocity"),
+                f.angular_velocity,
+                MAX_SPEED,
+                "rad/s",
+            )?;
         }
         if self.cloths.is_empty() && self.garments.is_empty() {
-            return Err(("cloths".into(), "a scene needs at least one cloth".into()));
+            return Err(("cloths".into(), Problem::NoCloth));
         }
         if !self.garments.is_empty() && !self.cloths.is_empty() {
-            return Err((
-                "garments".into(),
-                "a scene with garments cannot also have grid cloths".into(),
-            ));
+            return Err(("garments".into(), Problem::GarmentsAndCloths));
         }
         for (i, g) in self.garments.iter().enumerate() {
             crate::garment::pattern::validate(g)
-                .map_err(|e| (format!("garments[{i}]"), e.to_string()))?;
+                .map_err(|e| (format!("garments[{i}]"), Problem::Garment(e)))?;
+            // Sewing runs until the seams close or `max_time`: bound its steps like a run's.
+            self.check_run_length(g.sewing.max_time.max(self.solver.dt))
+                .map_err(|p| (format!("garments[{i}].sewing.max_time"), p))?;
         }
         let mut total = 0usize;
         let mut cloth_names = std::collections::HashSet::new();
         for (i, c) in self.cloths.iter().enumerate() {
             let key = |k: &str| format!("cloths[{i}].{k}");
             if !cloth_names.insert(c.name.as_str()) {
-                return Err((key("name"), format!("duplicate cloth '{}'", c.name)));
+                return Err((
+                    key("name"),
+                    Problem::Duplicate {
+                        name: c.name.clone(),
+                    },
+                ));
             }
-            positive(key("grid.size[0]"), c.grid.size[0])?;
-            positive(key("grid.size[1]"), c.grid.size[1])?;
+            positive(&key("grid.size[0]"), c.grid.size[0], MAX_LENGTH, " m")?;
+            positive(&key("grid.size[1]"), c.grid.size[1], MAX_LENGTH, " m")?;
             let [nu, nv] = c.grid.resolution;
             if nu < 2 || nv < 2 {
                 return Err((
                     key("grid.resolution"),
-                    "needs at least 2 vertices each way".into(),
+                    Problem::TooFewVertices {
+                        got: [nu, nv],
+                        min: 2,
+                    },
                 ));
             }
             let n = nu
@@ -141,32 +266,12 @@ impl Scene {
                 .ok_or_else(|| {
                     (
                         key("grid.resolution"),
-                        format!("more than {MAX_VERTICES} vertices"),
+                        Problem::TooManyVertices { max: MAX_VERTICES },
                     )
                 })?;
             total += n;
-            finite3(key("grid.pose.xyz"), c.grid.pose.xyz)?;
-            finite3(key("grid.pose.rpy"), c.grid.pose.rpy)?;
-            let m = &c.material;
-            positive(key("material.density"), m.density)?;
-            let needs = |e: EffectKind, v: f64, name: &str| {
-                if self.has(e) {
-                    positive(key(&format!("material.{name}")), v)
-                } else {
-                    non_negative(key(&format!("material.{name}")), v)
-                }
-            };
-            needs(EffectKind::Stretch, m.stretch, "stretch")?;
-            needs(EffectKind::Shear, m.shear, "shear")?;
-            needs(EffectKind::SkipOne, m.skip_one, "skip_one")?;
-            non_negative(key("material.bend_warp"), m.bend_warp)?;
-            non_negative(key("material.bend_weft"), m.bend_weft)?;
-            non_negative(key("material.twist"), m.twist)?;
-            non_negative(key("material.damping.spring"), m.damping.spring)?;
-            non_negative(key("material.damping.air"), m.damping.air)?;
-            non_negative(key("material.damping.diffusion"), m.damping.diffusion)?;
-            positive(key("material.thickness"), m.thickness)?;
-            non_negative(key("material.friction"), m.friction)?;
+            pose(&key("grid.pose"), &c.grid.pose)?;
+            self.validate_material(i, &c.material)?;
             for (k, p) in c.pins.iter().enumerate() {
                 check_selection(&key(&format!("pins[{k}]")), p, n)?;
             }
@@ -174,27 +279,218 @@ impl Scene {
                 if !names.contains(a.frame.as_str()) {
                     return Err((
                         key(&format!("attach[{k}].frame")),
-                        format!("no frame named '{}'", a.frame),
+                        Problem::Unknown {
+                            what: "frame",
+                            name: a.frame.clone(),
+                        },
                     ));
                 }
                 check_selection(&key(&format!("attach[{k}]")), &a.selection(), n)?;
             }
         }
         self.validate_robot()?;
+        validate_obstacles(&self.obstacles)?;
         crate::collide::validate_obstacles(&self.obstacles, "obstacles")
-            .map_err(|e| (e.path, e.message))?;
-        self.collection_check()?;
+            .map_err(|e| (e.path, Problem::Collision { message: e.message }))?;
+        self.validate_collision()?;
         if total > MAX_VERTICES {
             return Err((
                 "cloths".into(),
-                format!("more than {MAX_VERTICES} vertices in all"),
+                Problem::TooManyVertices { max: MAX_VERTICES },
             ));
         }
         Ok(())
     }
-}
 
-impl Scene {
+    /// The run's length, step, rates and solver budgets, against each other.
+    fn validate_run(&self) -> Result<(), Invalid> {
+        let s = &self.solver;
+        positive("duration", self.duration, MAX_DURATION, " s")?;
+        finite("solver.dt", s.dt)?;
+        if s.dt <= 0.0 {
+            return Err(("solver.dt".into(), Problem::NotPositive { value: s.dt }));
+        }
+        if s.dt < MIN_DT {
+            return Err((
+                "solver.dt".into(),
+                Problem::TooSmall {
+                    value: s.dt,
+                    min: MIN_DT,
+                    unit: " s",
+                },
+            ));
+        }
+        bounded("solver.dt", s.dt, MAX_DT, " s")?;
+        count("solver.substeps", s.substeps as u64, 1, 100_000)?;
+        self.check_run_length(self.duration)
+            .map_err(|p| ("duration".to_string(), p))?;
+        positive("publish_rate", self.publish_rate, 1.0 / MIN_DT, " Hz")?;
+        // Frames the run writes: bounded like its steps (1e300 Hz stalled the recorder).
+        let frames = self.publish_rate * self.duration;
+        if frames > MAX_TOTAL_SUBSTEPS {
+            return Err((
+                "publish_rate".into(),
+                Problem::TooManyFrames {
+                    rate: self.publish_rate,
+                    duration: self.duration,
+                    max: MAX_TOTAL_SUBSTEPS,
+                },
+            ));
+        }
+        if self.publish_rate > 1.0 / s.dt * (1.0 + 1e-9) {
+            log::warn!(
+                "publish_rate {} Hz is faster than the {} s step: a frame is written every step",
+                self.publish_rate,
+                s.dt
+            );
+        }
+        bounded3("gravity", self.gravity, MAX_GRAVITY, " m/s^2")?;
+        finite("solver.cg_tolerance", s.cg_tolerance)?;
+        if !(s.cg_tolerance > 0.0 && s.cg_tolerance < 1.0) {
+            return Err((
+                "solver.cg_tolerance".into(),
+                Problem::TooLarge {
+                    value: s.cg_tolerance,
+                    max: 1.0,
+                    unit: " (exclusive, and > 0)",
+                },
+            ));
+        }
+        count(
+            "solver.cg_max_iterations",
+            s.cg_max_iterations as u64,
+            1,
+            MAX_ITERATIONS,
+        )?;
+        positive("solver.guard.max_speed", s.guard.max_speed, 1e12, " m/s")?;
+        non_negative(
+            "solver.guard.energy_growth",
+            s.guard.energy_growth,
+            1e12,
+            "",
+        )?;
+        count(
+            "solver.guard.max_subdivisions",
+            s.guard.max_subdivisions as u64,
+            0,
+            20,
+        )?;
+        Ok(())
+    }
+
+    /// Whether a run of `duration` seconds is bounded with this scene's step: the step fits in
+    /// the run and `duration / dt * substeps` stays under [`MAX_TOTAL_SUBSTEPS`]. Used for the
+    /// scene's own `duration` and for a `--duration` given on the command line.
+    pub fn check_run_length(&self, duration: f64) -> Result<(), Problem> {
+        let s = &self.solver;
+        if !duration.is_finite() {
+            return Err(Problem::NotFinite { value: duration });
+        }
+        if duration <= 0.0 {
+            return Err(Problem::NotPositive { value: duration });
+        }
+        if duration > MAX_DURATION {
+            return Err(Problem::TooLarge {
+                value: duration,
+                max: MAX_DURATION,
+                unit: " s",
+            });
+        }
+        if s.dt > duration * (1.0 + 1e-9) {
+            return Err(Problem::StepLongerThanRun { dt: s.dt, duration });
+        }
+        let n = (duration / s.dt).ceil() * s.substeps as f64;
+        if n > MAX_TOTAL_SUBSTEPS {
+            return Err(Problem::TooManySteps {
+                duration,
+                dt: s.dt,
+                substeps: s.substeps,
+                count: n,
+                max: MAX_TOTAL_SUBSTEPS,
+            });
+        }
+        Ok(())
+    }
+
+    fn validate_effects(&self) -> Result<(), Invalid> {
+        let mut seen = std::collections::HashSet::new();
+        for (i, e) in self.effects.iter().enumerate() {
+            if !seen.insert(*e) {
+                return Err((
+                    format!("effects[{i}]"),
+                    Problem::Duplicate {
+                        name: format!("{e:?}"),
+                    },
+                ));
+            }
+        }
+        match (&self.wind, self.has(EffectKind::Wind)) {
+            (None, true) => return Err(("wind".into(), Problem::WindMissing)),
+            (Some(_), false) => {
+                log::warn!("scene has a wind section but `wind` is not in effects: no wind")
+            }
+            _ => {}
+        }
+        let Some(w) = &self.wind else {
+            return Ok(());
+        };
+        bounded3("wind.velocity", w.velocity.into(), MAX_WIND, " m/s")?;
+        positive(
+            "wind.air_density",
+            w.air_density,
+            MAX_AIR_DENSITY,
+            " kg/m^3",
+        )?;
+        non_negative("wind.drag_coefficient", w.drag_coefficient, MAX_DRAG, "")?;
+        for (k, g) in w.gusts.iter().enumerate() {
+            let key = |f: &str| format!("wind.gusts[{k}].{f}");
+            bounded3(&key("amplitude"), g.amplitude.into(), MAX_WIND, " m/s")?;
+            non_negative(&key("frequency"), g.frequency, MAX_FREQUENCY, " Hz")?;
+            bounded(&key("phase"), g.phase, MAX_ANGLE, " rad")?;
+        }
+        let mut previous = None;
+        for (k, key) in w.keys.iter().enumerate() {
+            time_after(&format!("wind.keys[{k}].t"), key.t, previous)?;
+            previous = Some(key.t);
+            bounded3(
+                &format!("wind.keys[{k}].velocity"),
+                key.velocity.into(),
+                MAX_WIND,
+                "m/s",
+            )?;
+        }
+        Ok(())
+    }
+
+    fn validate_material(&self, i: usize, m: &crate::cloth::Material) -> Result<(), Invalid> {
+        let key = |k: &str| format!("cloths[{i}].material.{k}");
+        positive(&key("density"), m.density, MAX_DENSITY, " kg/m^2")?;
+        let needs = |e: EffectKind, v: f64, name: &str| {
+            if self.has(e) {
+                positive(&key(name), v, MAX_STIFFNESS, " N/m")
+            } else {
+                non_negative(&key(name), v, MAX_STIFFNESS, " N/m")
+            }
+        };
+        needs(EffectKind::Stretch, m.stretch, "stretch")?;
+        needs(EffectKind::Shear, m.shear, "shear")?;
+        needs(EffectKind::SkipOne, m.skip_one, "skip_one")?;
+        non_negative(&key("bend_warp"), m.bend_warp, MAX_RIGIDITY, " N m")?;
+        non_negative(&key("bend_weft"), m.bend_weft, MAX_RIGIDITY, " N m")?;
+        non_negative(&key("twist"), m.twist, MAX_RIGIDITY, " N m")?;
+        non_negative(&key("damping.spring"), m.damping.spring, MAX_DAMPING, "")?;
+        non_negative(&key("damping.air"), m.damping.air, MAX_DAMPING, "")?;
+        non_negative(
+            &key("damping.diffusion"),
+            m.damping.diffusion,
+            MAX_DAMPING,
+            "",
+        )?;
+        positive(&key("thickness"), m.thickness, 1.0, " m")?;
+        non_negative(&key("friction"), m.friction, MAX_FRICTION, "")?;
+        Ok(())
+    }
+
     /// Checks of the `robot:` section that need no URDF; joint and link names are checked
     /// against the URDF when the scene is built.
     fn validate_robot(&self) -> Result<(), Invalid> {
@@ -202,39 +498,29 @@ impl Scene {
             return Ok(());
         };
         if r.urdf.trim().is_empty() {
-            return Err(("robot.urdf".into(), "must name a URDF file".into()));
+            return Err(("robot.urdf".into(), Problem::Empty));
         }
         if let Some(tr) = &r.trajectory {
             if tr.points.is_empty() {
-                return Err((
-                    "robot.trajectory.points".into(),
-                    "needs at least one point".into(),
-                ));
+                return Err(("robot.trajectory.points".into(), Problem::Empty));
             }
+            let mut previous = None;
             for (k, p) in tr.points.iter().enumerate() {
                 let key = |f: &str| format!("robot.trajectory.points[{k}].{f}");
                 if p.positions.len() != tr.names.len() {
                     return Err((
                         key("positions"),
-                        format!(
-                            "{} values for {} joint names",
-                            p.positions.len(),
-                            tr.names.len()
-                        ),
+                        Problem::Length {
+                            found: p.positions.len(),
+                            expected: tr.names.len(),
+                        },
                     ));
                 }
-                if let Some(j) = p.positions.iter().position(|x| !x.is_finite()) {
-                    return Err((
-                        format!("{}[{j}]", key("positions")),
-                        "must be finite".into(),
-                    ));
+                for (j, x) in p.positions.iter().enumerate() {
+                    bounded(&format!("{}[{j}]", key("positions")), *x, MAX_JOINT, "")?;
                 }
-                if !p.t.is_finite() || (k > 0 && p.t <= tr.points[k - 1].t) {
-                    return Err((
-                        key("t"),
-                        format!("times must be finite and increase (got {})", p.t),
-                    ));
-                }
+                time_after(&key("t"), p.t, previous)?;
+                previous = Some(p.t);
             }
         }
         for (k, a) in r.attach.iter().enumerate() {
@@ -242,20 +528,104 @@ impl Scene {
             let Some(c) = self.cloths.iter().find(|c| c.name == a.cloth) else {
                 return Err((
                     format!("{key}.cloth"),
-                    format!("no cloth named '{}'", a.cloth),
+                    Problem::Unknown {
+                        what: "cloth",
+                        name: a.cloth.clone(),
+                    },
                 ));
             };
             let n = c.grid.resolution[0].saturating_mul(c.grid.resolution[1]);
             check_selection(&key, &a.selection(), n)?;
         }
+        for (k, g) in r.grasps.iter().enumerate() {
+            let key = |f: &str| format!("robot.grasps[{k}].{f}");
+            bounded(&key("close_below"), g.close_below, MAX_JOINT, "")?;
+            bounded(&key("open_above"), g.open_above, MAX_JOINT, "")?;
+            bounded3(&key("pads.xyz"), g.pads.xyz, MAX_LENGTH, " m")?;
+            bounded3(&key("pads.rpy"), g.pads.rpy, MAX_ANGLE, " rad")?;
+            for (i, h) in g.pads.half_extents.iter().enumerate() {
+                positive(
+                    &key(&format!("pads.half_extents[{i}]")),
+                    *h,
+                    MAX_LENGTH,
+                    "m",
+                )?;
+            }
+        }
         Ok(())
     }
 
-    fn collection_check(&self) -> Result<(), Invalid> {
-        self.collision
-            .validate("collision")
-            .map_err(|e| (e.path, e.message))
+    fn validate_collision(&self) -> Result<(), Invalid> {
+        let c = &self.collision;
+        count(
+            "collision.self_iterations",
+            c.self_iterations as u64,
+            0,
+            MAX_ITERATIONS,
+        )?;
+        count(
+            "collision.zone_iterations",
+            c.zone_iterations as u64,
+            0,
+            MAX_ITERATIONS,
+        )?;
+        c.validate("collision")
+            .map_err(|e| (e.path, Problem::Collision { message: e.message }))
     }
+}
+
+/// Sizes, poses, motions and friction of scripted obstacles (finiteness and names are also
+/// checked by `collide::validate_obstacles`).
+fn validate_obstacles(obstacles: &[ObstacleSpec]) -> Result<(), Invalid> {
+    for (i, o) in obstacles.iter().enumerate() {
+        let key = |f: &str| format!("obstacles[{i}].{f}");
+        pose(&key("pose"), &o.pose)?;
+        let len = |f: &str, v: f64| positive(&key(&format!("shape.{f}")), v, MAX_LENGTH, " m");
+        match &o.shape {
+            ShapeSpec::Sphere { radius } => len("radius", *radius)?,
+            ShapeSpec::Box { half_extents } => {
+                for (a, h) in half_extents.iter().enumerate() {
+                    len(&format!("half_extents[{a}]"), *h)?;
+                }
+            }
+            ShapeSpec::Capsule {
+                radius,
+                half_height,
+            }
+            | ShapeSpec::Cylinder {
+                radius,
+                half_height,
+            } => {
+                len("radius", *radius)?;
+                len("half_height", *half_height)?;
+            }
+            ShapeSpec::Mesh { scale, .. } => {
+                for (a, s) in scale.iter().enumerate() {
+                    len(&format!("scale[{a}]"), *s)?;
+                }
+            }
+            ShapeSpec::Plane { normal } => bounded3(&key("shape.normal"), *normal, MAX_LENGTH, "")?,
+        }
+        if let Some(mu) = o.friction {
+            non_negative(&key("friction"), mu, MAX_FRICTION, "")?;
+        }
+        match &o.motion {
+            MotionSpec::Velocity { linear, angular } => {
+                bounded3(&key("motion.linear"), *linear, MAX_SPEED, " m/s")?;
+                bounded3(&key("motion.angular"), *angular, MAX_SPEED, " rad/s")?;
+            }
+            MotionSpec::Waypoints { points } => {
+                let mut previous = None;
+                for (k, w) in points.iter().enumerate() {
+                    time_after(&key(&format!("motion.points[{k}].t")), w.t, previous)?;
+                    previous = Some(w.t);
+                    pose(&key(&format!("motion.points[{k}].pose")), &w.pose)?;
+                }
+            }
+            MotionSpec::Static | MotionSpec::External => {}
+        }
+    }
+    Ok(())
 }
 
 fn check_selection(key: &str, s: &Selection, n: usize) -> Result<(), Invalid> {
@@ -264,10 +634,7 @@ fn check_selection(key: &str, s: &Selection, n: usize) -> Result<(), Invalid> {
         + s.region.is_some() as u8
         + s.near.is_some() as u8;
     if given != 1 {
-        return Err((
-            key.to_string(),
-            "give exactly one of vertex, vertices, region, near".into(),
-        ));
+        return Err((key.to_string(), Problem::SelectionForm));
     }
     let check = |v: u32| {
         if (v as usize) < n {
@@ -275,7 +642,10 @@ fn check_selection(key: &str, s: &Selection, n: usize) -> Result<(), Invalid> {
         } else {
             Err((
                 key.to_string(),
-                format!("vertex {v} out of range (cloth has {n})"),
+                Problem::VertexOutOfRange {
+                    vertex: v,
+                    count: n,
+                },
             ))
         }
     };
@@ -286,8 +656,8 @@ fn check_selection(key: &str, s: &Selection, n: usize) -> Result<(), Invalid> {
         vs.iter().try_for_each(|v| check(*v))?;
     }
     if let Some(near) = &s.near {
-        finite3(format!("{key}.near.point"), near.point)?;
-        positive(format!("{key}.near.radius"), near.radius)?;
+        bounded3(&format!("{key}.near.point"), near.point, MAX_LENGTH, " m")?;
+        positive(&format!("{key}.near.radius"), near.radius, MAX_LENGTH, " m")?;
     }
     Ok(())
 }

@@ -2,29 +2,48 @@
 
 use std::path::PathBuf;
 
-/// Everything that can go wrong writing or reading a bag.
+/// Everything that can go wrong writing or reading a bag. The cause, if any, is the
+/// `source()` (printed once by the command line), not repeated in the message.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BagError {
-    #[error("cannot create bag {path}: {source}")]
+    #[error("{path}: cannot create bag")]
     Create {
         path: PathBuf,
+        #[source]
         source: std::io::Error,
     },
-    #[error("cannot read bag {path}: {source}")]
+    #[error("{path}: cannot read bag")]
     Open {
         path: PathBuf,
+        #[source]
         source: std::io::Error,
+    },
+    /// Not a regular file, too large, unreadable (see `crate::input`).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
+    /// The file ends (or is damaged) before the first message of the topic asked for.
+    #[error(
+        "{path}: bag is truncated or damaged after {bytes} bytes, before any message was read"
+    )]
+    Truncated {
+        path: PathBuf,
+        bytes: usize,
+        #[source]
+        source: Option<mcap::McapError>,
     },
     #[error("{path} is not an MCAP file (bad magic bytes; rosbag2 .db3 files are not supported)")]
     NotMcap { path: PathBuf },
-    #[error("MCAP error in {path}: {source}")]
+    #[error("{path}: MCAP error")]
     Mcap {
         path: PathBuf,
+        #[source]
         source: mcap::McapError,
     },
-    #[error("cannot write bag {path}: {source}")]
+    #[error("{path}: cannot write bag")]
     Finish {
         path: PathBuf,
+        #[source]
         source: std::io::Error,
     },
     #[error(
@@ -56,9 +75,10 @@ pub enum BagError {
     },
     #[error("topic {topic:?} was added with the {distro} layout but the message has another (Marker.distro)")]
     LayoutMismatch { topic: String, distro: String },
-    #[error("cannot serialise a message for topic {topic:?}: {source}")]
+    #[error("cannot serialise a message for topic {topic:?}")]
     Encode {
         topic: String,
+        #[source]
         source: cdr_encoding::Error,
     },
     #[error("{path} has no messages on topic {topic:?} (topics with messages: {available})")]

@@ -9,7 +9,7 @@ use std::path::Path;
 const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 /// The messages of one topic, in file order, with what had to be skipped.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct TopicRead<M> {
     /// `(log_time_ns, message)`.
     pub messages: Vec<(u64, M)>,
@@ -17,7 +17,7 @@ pub struct TopicRead<M> {
     pub skipped: usize,
     /// Set when the file ends early or is corrupt after some records (e.g. a recorder
     /// killed before finishing); the messages before that point are kept.
-    pub truncated: Option<String>,
+    pub truncated: Option<mcap::McapError>,
 }
 
 /// Reads every `M` on `topic`. Fails on a missing or non-MCAP file, a missing topic or
@@ -27,10 +27,12 @@ pub fn read_topic<M: RosMessage + DeserializeOwned>(
     topic: &str,
 ) -> Result<TopicRead<M>, BagError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| BagError::Open {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::input::read_bytes(path, crate::input::InputKind::JointsBag).map_err(
+        |e| match e {
+            crate::input::InputError::Open { path, source, .. } => BagError::Open { path, source },
+            other => BagError::Input(other),
+        },
+    )?;
     if !bytes.starts_with(MCAP_MAGIC) {
         return Err(BagError::NotMcap {
             path: path.to_path_buf(),
@@ -54,13 +56,14 @@ pub fn read_topic<M: RosMessage + DeserializeOwned>(
         let message = match item {
             Ok(m) => m,
             Err(e) if topics.is_empty() => {
-                return Err(BagError::Mcap {
+                return Err(BagError::Truncated {
                     path: path.to_path_buf(),
-                    source: e,
+                    bytes: bytes.len(),
+                    source: Some(e),
                 })
             }
             Err(e) => {
-                read.truncated = Some(e.to_string());
+                read.truncated = Some(e);
                 break;
             }
         };
@@ -97,6 +100,14 @@ pub fn read_topic<M: RosMessage + DeserializeOwned>(
                 read.skipped += 1;
             }
         }
+    }
+    // A file cut at a record boundary reads without error but lacks its closing magic.
+    if read.messages.is_empty() && read.skipped == 0 && !bytes.ends_with(MCAP_MAGIC) {
+        return Err(BagError::Truncated {
+            path: path.to_path_buf(),
+            bytes: bytes.len(),
+            source: read.truncated,
+        });
     }
     if read.messages.is_empty() && read.skipped == 0 && !topics.iter().any(|t| t.0 == topic) {
         let mut available: Vec<&str> = topics.iter().map(|t| t.0.as_str()).collect();
@@ -150,9 +161,16 @@ pub fn read_joint_states(path: impl AsRef<Path>) -> Result<Vec<(u64, JointState)
             read.skipped
         );
     }
-    if let Some(reason) = &read.truncated {
+    if let Some(source) = read.truncated {
+        if read.messages.is_empty() {
+            return Err(BagError::Truncated {
+                path: path.to_path_buf(),
+                bytes: std::fs::metadata(path).map_or(0, |m| m.len() as usize),
+                source: Some(source),
+            });
+        }
         log::warn!(
-            "{}: file is truncated or corrupt ({reason}); read {} /joint_states messages before it",
+            "{}: file is truncated or corrupt ({source}); read {} /joint_states messages before it",
             path.display(),
             read.messages.len()
         );

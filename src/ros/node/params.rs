@@ -120,6 +120,9 @@ pub enum ParamsError {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// Not a regular file, too large, not UTF-8 (see `crate::input`).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     #[error("{origin}: not YAML: {message}")]
     Yaml { origin: String, message: String },
     #[error("{origin}: no `ros__parameters` for node `{node}` (expected `{node}:`, `/{node}:` or `/**:` at the top)")]
@@ -193,10 +196,7 @@ fn split_assign(s: &str) -> Result<(&str, &str), ParamsError> {
 impl NodeParams {
     /// Reads a parameters file; the scene path is resolved against the file's folder.
     pub fn load(path: &Path, node_name: &str) -> Result<NodeParams, ParamsError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::NodeParams)?;
         let mut p = Self::from_yaml(&text, &path.display().to_string(), node_name)?;
         if p.scene.is_relative() {
             if let Some(dir) = path.parent() {
@@ -208,6 +208,15 @@ impl NodeParams {
 
     /// Parses the `ros__parameters` of `node_name` from parameters-file text.
     pub fn from_yaml(text: &str, origin: &str, node_name: &str) -> Result<NodeParams, ParamsError> {
+        if let Err(line) = crate::input::check_yaml_depth(text) {
+            return Err(ParamsError::Yaml {
+                origin: origin.into(),
+                message: format!(
+                    "line {line}: nested deeper than {} levels",
+                    crate::input::MAX_YAML_DEPTH
+                ),
+            });
+        }
         let doc: Value = serde_yaml_ng::from_str(text).map_err(|e| ParamsError::Yaml {
             origin: origin.into(),
             message: e.to_string(),

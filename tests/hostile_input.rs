@@ -1,0 +1,1377 @@
+//! Hostile input against the built `drape` binary (issue 19): every kind of input a hostile or
+//! careless user can hand to `drape check` / `drape record` (scene YAML, URDF, meshes, joints
+//! bag, command-line values), each run as a child process with a time limit and a memory limit.
+//!
+//! For every case: the exit status is an error (or success for valid input such as a BOM), the
+//! child neither panicked nor died of a signal, the message names the file and the key, the
+//! inputs are byte for byte unchanged, any bag written holds only finite values, and no file
+//! outside the allowed folders was opened (a FIFO outside them notices an open).
+#![cfg(feature = "ros")]
+
+use drape::ros::msg::{JointState, PointCloud2, TFMessage};
+use drape::ros::{read_topic, BagWriter, Distro};
+use std::collections::BTreeMap;
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Memory limit of the child (address space).
+const MEMORY_LIMIT: u64 = 200 << 20;
+/// Budget per case; the machine running the tests is shared, so the assertion allows
+/// `SLACK` times this, and the child is killed at `KILL_AFTER`.
+const BUDGET: Duration = Duration::from_secs(2);
+const SLACK: u32 = 3;
+const KILL_AFTER: Duration = Duration::from_secs(10);
+
+const SCENE: &str = r#"name: NAMEXYZ
+duration: 0.1
+effects: [gravity, stretch, shear]
+solver: { integrator: implicit, dt: 0.02 }
+cloths:
+  - name: sheet
+    grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 1] } }
+    pins: [ { region: top_left } ]
+"#;
+
+const ROBOT_SCENE: &str = r#"name: NAMEXYZ
+duration: 0.1
+effects: [gravity, stretch, shear]
+solver: { integrator: implicit, dt: 0.02 }
+cloths:
+  - name: sheet
+    grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 2] } }
+    pins: [ { region: top_left } ]
+robot:
+  urdf: pkg/urdf/robot.urdf
+"#;
+
+fn urdf(mesh: &str, extra: &str) -> String {
+    format!(
+        r#"<robot name="r">
+  <link name="base"/>
+  <link name="arm"><collision><geometry><mesh filename="{mesh}"/></geometry></collision></link>
+  <joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  {extra}
+</robot>
+"#
+    )
+}
+
+const TETRA: &str = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\nendsolid t\n";
+
+/// A scene folder: `scene/scene.yaml`, `scene/pkg/urdf/robot.urdf`, `scene/pkg/meshes/m.stl`,
+/// and `outside/secret.stl` beside (not inside) the scene folder.
+struct Layout {
+    _tmp: tempfile::TempDir,
+    root: PathBuf,
+    scene_dir: PathBuf,
+}
+
+impl Layout {
+    fn new() -> Layout {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let root = tmp.path().to_path_buf();
+        let scene_dir = root.join("scene");
+        for d in ["scene/pkg/urdf", "scene/pkg/meshes", "outside"] {
+            std::fs::create_dir_all(root.join(d)).expect("mkdir");
+        }
+        std::fs::write(root.join("scene/pkg/package.xml"), "<package/>").expect("write");
+        std::fs::write(root.join("scene/pkg/meshes/m.stl"), TETRA).expect("write");
+        std::fs::write(root.join("outside/secret.stl"), TETRA).expect("write");
+        Layout {
+            _tmp: tmp,
+            root,
+            scene_dir,
+        }
+    }
+    fn path(&self, rel: &str) -> PathBuf {
+        self.root.join(rel)
+    }
+    fn write(&self, rel: &str, text: impl AsRef<[u8]>) -> PathBuf {
+        let p = self.path(rel);
+        if let Some(d) = p.parent() {
+            std::fs::create_dir_all(d).expect("mkdir");
+        }
+        std::fs::write(&p, text).expect("write");
+        p
+    }
+    fn scene(&self, text: &str) -> PathBuf {
+        self.write("scene/scene.yaml", text)
+    }
+    fn robot(&self, mesh: &str, extra: &str) -> PathBuf {
+        self.write("scene/pkg/urdf/robot.urdf", urdf(mesh, extra));
+        self.scene(ROBOT_SCENE)
+    }
+    fn fifo(&self, rel: &str) -> PathBuf {
+        let p = self.path(rel);
+        let c = std::ffi::CString::new(p.as_os_str().as_encoded_bytes()).expect("path");
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+        p
+    }
+    fn symlink(&self, target: &Path, rel: &str) -> PathBuf {
+        let p = self.path(rel);
+        std::os::unix::fs::symlink(target, &p).expect("symlink");
+        p
+    }
+    fn sparse(&self, rel: &str, len: u64) -> PathBuf {
+        let p = self.path(rel);
+        let f = std::fs::File::create(&p).expect("create");
+        f.set_len(len).expect("set_len");
+        p
+    }
+    /// Every regular file under the layout (symlinks not followed) and its bytes' hash.
+    fn hashes(&self) -> BTreeMap<PathBuf, u64> {
+        fn walk(d: &Path, out: &mut BTreeMap<PathBuf, u64>) {
+            let Ok(rd) = std::fs::read_dir(d) else { return };
+            for e in rd.flatten() {
+                let p = e.path();
+                let Ok(m) = std::fs::symlink_metadata(&p) else {
+                    continue;
+                };
+                if m.is_dir() {
+                    walk(&p, out);
+                } else if m.is_file() && m.len() < (64 << 20) {
+                    use std::hash::{Hash, Hasher};
+                    let mut h = std::collections::hash_map::DefaultHasher::new();
+                    std::fs::read(&p).unwrap_or_default().hash(&mut h);
+                    out.insert(p, h.finish());
+                }
+            }
+        }
+        let mut out = BTreeMap::new();
+        walk(&self.root, &mut out);
+        out
+    }
+}
+
+/// A FIFO outside the allowed folders with a writer waiting on it: if drape opens it for
+/// reading, the writer's open returns and `opened()` is true.
+struct Tripwire {
+    path: PathBuf,
+    handle: Option<std::thread::JoinHandle<bool>>,
+}
+
+impl Tripwire {
+    fn new(l: &Layout, rel: &str) -> Tripwire {
+        let path = l.fifo(rel);
+        let p = path.clone();
+        let handle = std::thread::spawn(move || {
+            // Blocks until a reader opens the FIFO (drape, or `opened()` below).
+            let f = std::fs::OpenOptions::new().write(true).open(&p);
+            let by_us = std::fs::metadata(p.with_extension("released")).is_ok();
+            drop(f);
+            !by_us
+        });
+        Tripwire {
+            path,
+            handle: Some(handle),
+        }
+    }
+    /// Whether anyone but this test opened the FIFO.
+    fn opened(mut self) -> bool {
+        use std::os::unix::fs::OpenOptionsExt;
+        let h = self.handle.take().expect("once");
+        if !h.is_finished() {
+            std::fs::write(self.path.with_extension("released"), b"").expect("marker");
+            let _r = std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NONBLOCK)
+                .open(&self.path)
+                .expect("open fifo");
+            return h.join().expect("writer thread");
+        }
+        h.join().expect("writer thread")
+    }
+}
+
+struct Outcome {
+    code: Option<i32>,
+    signal: Option<i32>,
+    stderr: String,
+    elapsed: Duration,
+}
+
+/// The binary under test: the one cargo built, or `HOSTILE_DRAPE` (to measure another build,
+/// e.g. main before this suite, with `HOSTILE_REPORT=1` to list every failing case).
+fn binary() -> PathBuf {
+    std::env::var_os("HOSTILE_DRAPE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_drape")))
+}
+
+/// With `HOSTILE_REPORT` set, failures are printed (`FAIL case: why`) instead of failing.
+fn report_only() -> bool {
+    std::env::var_os("HOSTILE_REPORT").is_some()
+}
+
+fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
+    let mut cmd = Command::new(binary());
+    cmd.args(args)
+        .env("RUST_LOG", "error")
+        .env("MALLOC_ARENA_MAX", "2")
+        .env_remove("ROS_PACKAGE_PATH")
+        .env_remove("AMENT_PREFIX_PATH")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    unsafe {
+        cmd.pre_exec(|| {
+            let lim = libc::rlimit {
+                rlim_cur: MEMORY_LIMIT,
+                rlim_max: MEMORY_LIMIT,
+            };
+            if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let start = Instant::now();
+    let mut child = cmd.spawn().expect("spawn drape");
+    let mut stderr = child.stderr.take().expect("stderr");
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = std::io::Read::read_to_string(&mut stderr, &mut s);
+        s
+    });
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if start.elapsed() > KILL_AFTER {
+            let _ = child.kill();
+            let s = child.wait().expect("wait");
+            if !report_only() {
+                panic!("drape {args:?} still running after {KILL_AFTER:?}; killed ({s})");
+            }
+            break s;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let elapsed = start.elapsed();
+    use std::os::unix::process::ExitStatusExt;
+    Outcome {
+        code: status.code(),
+        signal: status.signal(),
+        stderr: reader.join().unwrap_or_default(),
+        elapsed,
+    }
+}
+
+fn check(scene: &Path) -> Outcome {
+    drape(&["check".as_ref(), "--scene".as_ref(), scene.as_os_str()])
+}
+
+fn record(scene: &Path, out: &Path, extra: &[&str]) -> Outcome {
+    let mut args: Vec<&std::ffi::OsStr> = vec![
+        "record".as_ref(),
+        "--quiet".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+    drape(&args)
+}
+
+/// Every float in every message of a bag drape wrote is finite.
+fn assert_bag_finite(bag: &Path) {
+    if !bag.is_file() {
+        return;
+    }
+    if let Ok(r) = read_topic::<PointCloud2>(bag, "/drape/points") {
+        for (_, m) in &r.messages {
+            for c in m.data.chunks_exact(4) {
+                let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+                assert!(v.is_finite(), "{}: non-finite point", bag.display());
+            }
+        }
+    }
+    if let Ok(r) = read_topic::<JointState>(bag, "/joint_states") {
+        for (_, m) in &r.messages {
+            assert!(
+                m.position.iter().all(|v| v.is_finite()),
+                "{}",
+                bag.display()
+            );
+        }
+    }
+    if let Ok(r) = read_topic::<TFMessage>(bag, "/tf") {
+        for (_, m) in &r.messages {
+            for t in &m.transforms {
+                let (p, q) = (&t.transform.translation, &t.transform.rotation);
+                assert!(
+                    [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+                        .iter()
+                        .all(|v| v.is_finite()),
+                    "{}: non-finite /tf",
+                    bag.display()
+                );
+            }
+        }
+    }
+}
+
+/// What a case must end with.
+enum Expect<'a> {
+    /// Exit 1 with an error whose text contains every one of these.
+    Error(&'a [&'a str]),
+    /// Exit 0.
+    Ok,
+}
+
+/// The common assertions of every case.
+fn judge(name: &str, l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) {
+    let failures = verdict(l, before, o, want);
+    let err = o.stderr.trim().replace('\n', "\n    ");
+    if failures.is_empty() {
+        eprintln!("{name}: ok in {:?}\n    {err}", o.elapsed);
+    } else if report_only() {
+        eprintln!("FAIL {name}: {}\n    {err}", failures.join("; "));
+    } else {
+        panic!("{name}: {}\n    {err}", failures.join("; "));
+    }
+}
+
+fn verdict(l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) -> Vec<String> {
+    let mut f = Vec::new();
+    let err = &o.stderr;
+    if let Some(s) = o.signal {
+        f.push(format!("killed by signal {s}"));
+    }
+    if err.contains("panicked") {
+        f.push("panicked".into());
+    }
+    if o.elapsed >= BUDGET * SLACK {
+        f.push(format!("took {:?} (budget {BUDGET:?})", o.elapsed));
+    }
+    match want {
+        Expect::Ok => {
+            if o.code != Some(0) {
+                f.push(format!("exit {:?}, expected success", o.code));
+            }
+        }
+        Expect::Error(parts) => {
+            if o.code != Some(1) {
+                f.push(format!("exit {:?}, expected 1", o.code));
+            }
+            if !err.contains("drape: error: ") {
+                f.push("no error message".into());
+            }
+            for p in parts {
+                if !err.contains(p) {
+                    f.push(format!("error lacks `{p}`"));
+                }
+            }
+            if err.lines().next().unwrap_or("").contains("NAMEXYZ") {
+                f.push("error starts with the scene's name, not its file".into());
+            }
+            let lines: Vec<&str> = err
+                .lines()
+                .map(|x| x.trim().trim_start_matches("caused by: "))
+                .collect();
+            for (i, a) in lines.iter().enumerate() {
+                if a.len() >= 12 && lines[i + 1..].contains(a) {
+                    f.push("a line is repeated".into());
+                }
+            }
+        }
+    }
+    let after = l.hashes();
+    for (p, h) in before {
+        if p.file_name() == Some("out.mcap".as_ref()) {
+            continue;
+        }
+        if after.get(p) != Some(h) {
+            f.push(format!("input {} changed", p.display()));
+        }
+    }
+    for p in after.keys() {
+        if p.extension().is_some_and(|e| e == "mcap") {
+            if let Err(e) = std::panic::catch_unwind(|| assert_bag_finite(p)) {
+                let why = e.downcast_ref::<String>().cloned().unwrap_or_default();
+                f.push(format!("non-finite value in a bag: {why}"));
+            }
+        }
+    }
+    f
+}
+
+/// Runs one scene text through `drape check` and `drape record`, expecting the same outcome.
+fn scene_case(name: &str, text: &str, want_key: &str) {
+    let l = Layout::new();
+    let scene = l.scene(text);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        name,
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml", want_key]),
+    );
+    let o = record(&scene, &l.path("scene/out.mcap"), &[]);
+    judge(
+        name,
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml", want_key]),
+    );
+}
+
+fn with(base: &str, from: &str, to: &str) -> String {
+    assert!(base.contains(from), "{from}");
+    base.replacen(from, to, 1)
+}
+
+// ---------------------------------------------------------------- panics and aborts
+
+#[test]
+fn non_finite_and_overflowing_wind_keys_are_rejected() {
+    let windy = with(
+        SCENE,
+        "effects: [gravity, stretch, shear]",
+        "effects: [gravity, stretch, shear, wind]\nwind: { keys: [ { t: 0.0, velocity: [1, 0, 0] }, { t: T, velocity: [2, 0, 0] } ] }",
+    );
+    for (t, key) in [
+        (".nan", "wind.keys[1].t"),
+        (".inf", "wind.keys[1].t"),
+        ("-.inf", "wind.keys[1].t"),
+        ("1e300", "wind.keys[1].t"),
+        ("-1.0", "wind.keys[1].t"),
+    ] {
+        scene_case(&format!("wind key t = {t}"), &windy.replace("T", t), key);
+    }
+    let gust = with(
+        SCENE,
+        "effects: [gravity, stretch, shear]",
+        "effects: [gravity, stretch, shear, wind]\nwind: { gusts: [ { amplitude: [1, 0, 0], frequency: 1e300 } ] }",
+    );
+    scene_case("gust frequency 1e300", &gust, "wind.gusts[0].frequency");
+}
+
+#[test]
+fn deep_nesting_is_rejected_without_overflowing_the_stack() {
+    let l = Layout::new();
+    let deep = "<a>".repeat(100_000) + &"</a>".repeat(100_000);
+    l.write("scene/pkg/urdf/robot.urdf", urdf("../meshes/m.stl", &deep));
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "URDF 100k nested",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "nested deeper"]),
+    );
+
+    // Nested inside a link, and as an unclosed flood.
+    let l = Layout::new();
+    l.write(
+        "scene/pkg/urdf/robot.urdf",
+        format!(
+            "<robot name='r'><link name='a'>{}",
+            "<visual>".repeat(200_000)
+        ),
+    );
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "URDF unclosed flood",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf"]),
+    );
+
+    // Collada mesh nested 100k deep.
+    let l = Layout::new();
+    l.write(
+        "scene/pkg/meshes/deep.dae",
+        "<COLLADA>".to_string()
+            + &"<node>".repeat(100_000)
+            + &"</node>".repeat(100_000)
+            + "</COLLADA>",
+    );
+    let scene = l.robot("../meshes/deep.dae", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "Collada 100k nested",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["deep.dae", "arm"]),
+    );
+
+    // YAML: sequences and maps nested 100k deep.
+    for (what, text) in [
+        (
+            "YAML sequences",
+            format!(
+                "{SCENE}extra: {}{}\n",
+                "[".repeat(100_000),
+                "]".repeat(100_000)
+            ),
+        ),
+        (
+            "YAML maps",
+            format!(
+                "{SCENE}extra: {}1{}\n",
+                "{a: ".repeat(100_000),
+                "}".repeat(100_000)
+            ),
+        ),
+        ("YAML block maps", {
+            let mut s = SCENE.to_string() + "extra:\n";
+            for d in 1..2500 {
+                s.push_str(&" ".repeat(d));
+                s.push_str("a:\n");
+            }
+            s
+        }),
+    ] {
+        let l = Layout::new();
+        let scene = l.scene(&text);
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(what, &l, &before, &o, Expect::Error(&["scene.yaml"]));
+    }
+}
+
+// ---------------------------------------------------------------- hangs
+
+#[test]
+fn values_that_would_never_end_are_rejected() {
+    for (name, from, to, key) in [
+        (
+            "publish_rate 1e300",
+            "duration: 0.1",
+            "duration: 0.1\npublish_rate: 1e300",
+            "publish_rate",
+        ),
+        (
+            "publish_rate x duration",
+            "duration: 0.1",
+            "duration: 1000\npublish_rate: 1e5",
+            "publish_rate",
+        ),
+        ("dt 1e-300", "dt: 0.02", "dt: 1e-300", "solver.dt"),
+        (
+            "dt 1e-5 for 1e6 s",
+            "duration: 0.1",
+            "duration: 1e6",
+            "duration",
+        ),
+        (
+            "substeps x duration",
+            "dt: 0.02",
+            "dt: 0.02, substeps: 100000 }\nduration: 1e5\nx: {",
+            "solver",
+        ),
+        (
+            "cg_max_iterations 4e9",
+            "dt: 0.02",
+            "dt: 0.02, cg_max_iterations: 4000000000",
+            "solver.cg_max_iterations",
+        ),
+        (
+            "duration 1e300",
+            "duration: 0.1",
+            "duration: 1e300",
+            "duration",
+        ),
+    ] {
+        if name == "substeps x duration" {
+            // Huge run length through substeps: duration / dt * substeps.
+            let text = with(SCENE, "dt: 0.02 }", "dt: 0.02, substeps: 100000 }");
+            let text = with(&text, "duration: 0.1", "duration: 2000");
+            scene_case(name, &text, "duration");
+            continue;
+        }
+        scene_case(name, &with(SCENE, from, to), key);
+    }
+    let collide =
+        format!("{SCENE}collision: {{ self_collision: true, self_iterations: 1000000000 }}\n");
+    scene_case("self_iterations 1e9", &collide, "collision.self_iterations");
+}
+
+#[test]
+fn command_line_run_length_is_bounded() {
+    let l = Layout::new();
+    let scene = l.scene(SCENE);
+    let before = l.hashes();
+    for d in ["1e300", "inf", "NaN", "-1", "1e-9", "0"] {
+        let arg = format!("--duration={d}");
+        let o = record(&scene, &l.path("scene/out.mcap"), &[&arg]);
+        judge(
+            &format!("--duration {d}"),
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["--duration"]),
+        );
+    }
+}
+
+#[test]
+fn fifos_never_block() {
+    // Scene, URDF, mesh, joints bag and obstacle mesh as FIFOs with no writer.
+    let l = Layout::new();
+    let scene = l.fifo("scene/fifo.yaml");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "FIFO scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["fifo.yaml", "FIFO"]),
+    );
+
+    let l = Layout::new();
+    l.fifo("scene/pkg/urdf/robot.urdf");
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "FIFO URDF",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "FIFO"]),
+    );
+
+    let l = Layout::new();
+    l.fifo("scene/pkg/meshes/f.stl");
+    let scene = l.robot("../meshes/f.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "FIFO mesh",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["f.stl", "arm"]),
+    );
+
+    let l = Layout::new();
+    l.fifo("scene/ob.stl");
+    let scene = l.scene(&format!(
+        "{SCENE}obstacles:\n  - {{ name: rock, shape: {{ type: mesh, path: ob.stl }} }}\n"
+    ));
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "FIFO obstacle mesh",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["ob.stl", "obstacles[0]"]),
+    );
+
+    let l = Layout::new();
+    let scene = l.robot("../meshes/m.stl", "");
+    let joints = l.fifo("scene/joints.mcap");
+    let before = l.hashes();
+    let o = record(
+        &scene,
+        &l.path("scene/out.mcap"),
+        &["--joints", joints.to_str().expect("utf8")],
+    );
+    judge(
+        "FIFO joints bag",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["joints.mcap", "FIFO"]),
+    );
+}
+
+// ---------------------------------------------------------------- unbounded reads
+
+#[test]
+fn devices_and_huge_files_are_not_read() {
+    let zero = Path::new("/dev/zero");
+    // Scene: /dev/zero itself, a symlink to it, a sparse 8 GB file.
+    let l = Layout::new();
+    let link = l.symlink(zero, "scene/zero.yaml");
+    for (name, p) in [
+        ("/dev/zero scene", zero.to_path_buf()),
+        ("symlink to /dev/zero", link),
+    ] {
+        let before = l.hashes();
+        let o = check(&p);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["zero", "character device"]),
+        );
+    }
+    let big = l.sparse("scene/big.yaml", 8 << 30);
+    let before = l.hashes();
+    let o = check(&big);
+    judge(
+        "8 GB scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["big.yaml", "larger than"]),
+    );
+
+    // URDF and mesh as /dev/zero links and as sparse files.
+    let l = Layout::new();
+    l.symlink(zero, "scene/pkg/urdf/robot.urdf");
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "URDF -> /dev/zero",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "device"]),
+    );
+
+    let l = Layout::new();
+    l.sparse("scene/pkg/urdf/robot.urdf", 1 << 32);
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "4 GB URDF",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "larger than"]),
+    );
+
+    let l = Layout::new();
+    l.symlink(zero, "scene/pkg/meshes/z.stl");
+    let scene = l.robot("package://pkg/meshes/z.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "mesh -> /dev/zero",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["z.stl", "arm"]),
+    );
+
+    let l = Layout::new();
+    l.sparse("scene/pkg/meshes/huge.stl", 1 << 33);
+    let scene = l.robot("../meshes/huge.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "8 GB mesh",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["huge.stl", "larger than"]),
+    );
+
+    let l = Layout::new();
+    l.symlink(zero, "scene/zero.stl");
+    let scene = l.scene(&format!(
+        "{SCENE}obstacles:\n  - {{ name: rock, shape: {{ type: mesh, path: zero.stl }} }}\n"
+    ));
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "obstacle mesh -> /dev/zero",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["zero.stl", "obstacles[0]"]),
+    );
+
+    // Joints bag: /dev/zero and an 8 GB sparse file.
+    let l = Layout::new();
+    let scene = l.robot("../meshes/m.stl", "");
+    let zj = l.symlink(zero, "scene/zero.mcap");
+    let bj = l.sparse("scene/big.mcap", 8 << 30);
+    for (name, j, what) in [
+        ("joints -> /dev/zero", zj, "device"),
+        ("8 GB joints bag", bj, "larger than"),
+    ] {
+        let before = l.hashes();
+        let o = record(
+            &scene,
+            &l.path("scene/out.mcap"),
+            &["--joints", j.to_str().expect("utf8")],
+        );
+        judge(name, &l, &before, &o, Expect::Error(&["--joints", what]));
+    }
+
+    // A scene of 5 million pin indices (about 40 MB) is over the scene cap.
+    let l = Layout::new();
+    let mut text = with(
+        SCENE,
+        "pins: [ { region: top_left } ]",
+        "pins: [ { vertices: [",
+    );
+    text.reserve(40 << 20);
+    for _ in 0..5_000_000 {
+        text.push_str("0, ");
+    }
+    text.push_str("0] } ]\n");
+    let scene = l.scene(&text);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "5M pin indices",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml", "larger than"]),
+    );
+}
+
+// ---------------------------------------------------------------- silent garbage, non-finite output
+
+#[test]
+fn overflowing_numbers_are_named_by_their_key() {
+    for (name, from, to, key) in [
+        (
+            "grid xyz 1e308",
+            "xyz: [0, 0, 1]",
+            "xyz: [1e308, 0, 1.5]",
+            "cloths[0].grid.pose.xyz[0]",
+        ),
+        (
+            "grid rpy 1e300",
+            "xyz: [0, 0, 1]",
+            "xyz: [0, 0, 1], rpy: [1e300, 0, 0]",
+            "cloths[0].grid.pose.rpy[0]",
+        ),
+        (
+            "grid size 1e300",
+            "size: [0.2, 0.2]",
+            "size: [1e300, 0.2]",
+            "cloths[0].grid.size[0]",
+        ),
+        (
+            "stretch 1e308",
+            "pins:",
+            "material: { stretch: 1e308 }\n    pins:",
+            "cloths[0].material.stretch",
+        ),
+        (
+            "density 1e308",
+            "pins:",
+            "material: { density: 1e308 }\n    pins:",
+            "cloths[0].material.density",
+        ),
+        (
+            "density NaN",
+            "pins:",
+            "material: { density: .nan }\n    pins:",
+            "cloths[0].material.density",
+        ),
+        (
+            "friction inf",
+            "pins:",
+            "material: { friction: .inf }\n    pins:",
+            "cloths[0].material.friction",
+        ),
+        (
+            "thickness 1e10",
+            "pins:",
+            "material: { thickness: 1e10 }\n    pins:",
+            "cloths[0].material.thickness",
+        ),
+        (
+            "gravity -1e308",
+            "duration: 0.1",
+            "duration: 0.1\ngravity: [0, 0, -1e308]",
+            "gravity[2]",
+        ),
+        ("dt 1e9 for 0.2 s", "dt: 0.02", "dt: 1e9", "solver.dt"),
+        (
+            "dt above duration",
+            "duration: 0.1",
+            "duration: 0.01",
+            "duration",
+        ),
+        (
+            "near radius inf",
+            "pins: [ { region: top_left } ]",
+            "pins: [ { near: { point: [0, 0, 1], radius: .inf } } ]",
+            "cloths[0].pins[0].near.radius",
+        ),
+    ] {
+        scene_case(name, &with(SCENE, from, to), key);
+    }
+    let framed = format!(
+        "{SCENE}frames:\n  - {{ name: h, pose: {{ xyz: [0, 0, 1] }}, linear_velocity: [1e300, 0, 0] }}\n"
+    );
+    scene_case(
+        "frame velocity 1e300",
+        &framed,
+        "frames[0].linear_velocity[0]",
+    );
+    let obstacle = format!(
+        "{SCENE}obstacles:\n  - {{ name: rock, shape: {{ type: sphere, radius: 0.1 }}, pose: {{ xyz: [1e308, 0, 0] }} }}\n"
+    );
+    scene_case("obstacle pose 1e308", &obstacle, "obstacles[0].pose.xyz[0]");
+    let waypoints = format!(
+        "{SCENE}obstacles:\n  - {{ name: rock, shape: {{ type: sphere, radius: 0.1 }}, motion: {{ type: waypoints, points: [ {{ t: .nan, pose: {{}} }} ] }} }}\n"
+    );
+    scene_case(
+        "waypoint t NaN",
+        &waypoints,
+        "obstacles[0].motion.points[0].t",
+    );
+    let traj = with(
+        ROBOT_SCENE,
+        "urdf: pkg/urdf/robot.urdf",
+        "urdf: pkg/urdf/robot.urdf\n  trajectory: { names: [j], points: [ { t: 0, positions: [1e300] } ] }",
+    );
+    let l = Layout::new();
+    l.write("scene/pkg/urdf/robot.urdf", urdf("../meshes/m.stl", ""));
+    let scene = l.scene(&traj);
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "trajectory 1e300",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml", "robot.trajectory.points[0].positions[0]"]),
+    );
+}
+
+#[test]
+fn mimic_multipliers_and_offsets_must_be_finite_and_plausible() {
+    for (name, attrs) in [
+        ("mimic multiplier NaN", r#"multiplier="nan""#),
+        ("mimic multiplier inf", r#"multiplier="inf""#),
+        ("mimic offset 1e308", r#"offset="1e308""#),
+        ("mimic multiplier -1e300", r#"multiplier="-1e300""#),
+    ] {
+        let l = Layout::new();
+        let extra = format!(
+            r#"<link name="finger"/><joint name="m" type="revolute"><parent link="arm"/><child link="finger"/>
+               <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/><mimic joint="j" {attrs}/></joint>"#
+        );
+        let scene = l.robot("../meshes/m.stl", &extra);
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["robot.urdf", "joint `m`", "mimic"]),
+        );
+        let o = record(&scene, &l.path("scene/out.mcap"), &[]);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["robot.urdf", "joint `m`"]),
+        );
+    }
+}
+
+// ---------------------------------------------------------------- escapes
+
+#[test]
+fn meshes_outside_the_allowed_folders_are_refused_before_opening() {
+    let outside = |l: &Layout| l.path("outside/secret.stl");
+    // A symlink in the package pointing outside, through every reference form.
+    for (name, uri) in [
+        ("package:// symlink", "package://pkg/meshes/link.stl"),
+        ("relative symlink", "../meshes/link.stl"),
+        ("file:// symlink", "FILE"),
+    ] {
+        let l = Layout::new();
+        l.symlink(&outside(&l), "scene/pkg/meshes/link.stl");
+        let uri = if uri == "FILE" {
+            format!("file://{}", l.path("scene/pkg/meshes/link.stl").display())
+        } else {
+            uri.to_string()
+        };
+        let scene = l.robot(&uri, "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["robot.urdf", "arm", "outside the allowed"]),
+        );
+    }
+    // Plain paths and package URIs that land outside.
+    for (name, uri) in [
+        ("../../.. relative", "../../../outside/secret.stl"),
+        ("absolute path", "ABS"),
+        ("file:// absolute", "FILEABS"),
+        (
+            "package://pkg/../..",
+            "package://pkg/../../outside/secret.stl",
+        ),
+    ] {
+        let l = Layout::new();
+        let uri = match uri {
+            "ABS" => outside(&l).display().to_string(),
+            "FILEABS" => format!("file://{}", outside(&l).display()),
+            u => u.to_string(),
+        };
+        let scene = l.robot(&uri, "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(name, &l, &before, &o, Expect::Error(&["robot.urdf", "arm"]));
+    }
+    // `package://outside/...` must not find a sibling folder of the scene named like the URI.
+    let l = Layout::new();
+    let scene = l.robot("package://outside/secret.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "package://<sibling>",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "arm"]),
+    );
+
+    // Scene obstacle meshes: `..`, absolute, and a symlink out.
+    for (name, path) in [
+        ("obstacle ..", "../outside/secret.stl"),
+        ("obstacle absolute", "ABS"),
+        ("obstacle symlink", "LINK"),
+    ] {
+        let l = Layout::new();
+        let path = match path {
+            "ABS" => outside(&l).display().to_string(),
+            "LINK" => {
+                l.symlink(&outside(&l), "scene/rock.stl");
+                "rock.stl".to_string()
+            }
+            p => p.to_string(),
+        };
+        let scene = l.scene(&format!(
+            "{SCENE}obstacles:\n  - {{ name: rock, shape: {{ type: mesh, path: '{path}' }} }}\n"
+        ));
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["scene.yaml", "obstacles[0]", "outside the allowed"]),
+        );
+    }
+
+    // The tripwire: a FIFO outside the allowed folders, reached through a symlink in the
+    // package, must never be opened (the check happens before the open).
+    let l = Layout::new();
+    let wire = Tripwire::new(&l, "outside/wire.stl");
+    l.symlink(&l.path("outside/wire.stl"), "scene/pkg/meshes/wire.stl");
+    let scene = l.robot("package://pkg/meshes/wire.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "tripwire",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["robot.urdf", "outside the allowed"]),
+    );
+    assert!(
+        !wire.opened(),
+        "drape opened a file outside the allowed folders"
+    );
+}
+
+#[test]
+fn inside_the_rules_meshes_load() {
+    // Package, relative and symlink-inside references, and an explicit allow-list entry.
+    for uri in [
+        "package://pkg/meshes/m.stl",
+        "../meshes/m.stl",
+        "package://pkg/meshes/inner.stl",
+    ] {
+        let l = Layout::new();
+        l.symlink(
+            &l.path("scene/pkg/meshes/m.stl"),
+            "scene/pkg/meshes/inner.stl",
+        );
+        let scene = l.robot(uri, "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(uri, &l, &before, &o, Expect::Ok);
+    }
+    let l = Layout::new();
+    l.write(
+        "scene/pkg/urdf/robot.urdf",
+        urdf("../../../outside/secret.stl", ""),
+    );
+    let scene = l.scene(&format!("{ROBOT_SCENE}mesh_paths: [../outside]\n"));
+    let before = l.hashes();
+    let o = check(&scene);
+    judge("allow-listed folder", &l, &before, &o, Expect::Ok);
+}
+
+// ---------------------------------------------------------------- destroyed input
+
+fn joints_bag(path: &Path) {
+    let mut bag = BagWriter::create(path).expect("bag");
+    let t = bag
+        .add_topic::<JointState>("/joint_states", Distro::Jazzy, None)
+        .expect("topic");
+    for k in 0..5u64 {
+        let js = JointState {
+            name: vec!["j".into()],
+            position: vec![0.1 * k as f64],
+            ..JointState::default()
+        };
+        bag.write(t, k * 20_000_000, &js).expect("write");
+    }
+    bag.finish().expect("finish");
+}
+
+#[test]
+fn the_recorder_never_writes_onto_its_inputs() {
+    let l = Layout::new();
+    let scene = l.robot("package://pkg/meshes/m.stl", "");
+    let joints = l.path("scene/joints.mcap");
+    joints_bag(&joints);
+    let link = l.symlink(&scene, "scene/link.mcap");
+    let hard = l.path("scene/hard.mcap");
+    std::fs::hard_link(l.path("scene/pkg/urdf/robot.urdf"), &hard).expect("hard link");
+    let j = joints.to_str().expect("utf8");
+    for (name, out, extra) in [
+        ("--out = scene", scene.clone(), vec![]),
+        ("--out = symlink to scene", link, vec![]),
+        ("--out = hard link of the URDF", hard, vec![]),
+        ("--out = mesh", l.path("scene/pkg/meshes/m.stl"), vec![]),
+        ("--out = joints bag", joints.clone(), vec!["--joints", j]),
+        ("--out = directory", l.path("scene/pkg"), vec![]),
+    ] {
+        let before = l.hashes();
+        let o = record(&scene, &out, &extra);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&[&out.display().to_string()]),
+        );
+    }
+    // And a normal recording with the joints bag works and leaves no staging file behind.
+    let before = l.hashes();
+    let out = l.path("scene/out.mcap");
+    let o = record(&scene, &out, &["--joints", j]);
+    judge("record with joints", &l, &before, &o, Expect::Ok);
+    assert!(report_only() || out.is_file());
+    let names: Vec<String> = std::fs::read_dir(&l.scene_dir)
+        .expect("dir")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        report_only() || !names.iter().any(|n| n.contains(".partial")),
+        "{names:?}"
+    );
+}
+
+// ---------------------------------------------------------------- wrong or unclear errors
+
+#[test]
+fn valid_input_with_a_byte_order_mark_is_accepted() {
+    let l = Layout::new();
+    let scene = l.scene(&format!("\u{feff}{SCENE}"));
+    let before = l.hashes();
+    judge("BOM scene", &l, &before, &check(&scene), Expect::Ok);
+    let l = Layout::new();
+    l.write(
+        "scene/pkg/urdf/robot.urdf",
+        format!("\u{feff}{}", urdf("../meshes/m.stl", "")),
+    );
+    let scene = l.scene(&format!("\u{feff}{ROBOT_SCENE}"));
+    let before = l.hashes();
+    judge("BOM URDF", &l, &before, &check(&scene), Expect::Ok);
+}
+
+#[test]
+fn errors_name_the_file_and_say_what_is_wrong() {
+    // A misspelled URDF root.
+    let l = Layout::new();
+    l.write(
+        "scene/pkg/urdf/robot.urdf",
+        urdf("../meshes/m.stl", "")
+            .replace("<robot", "<robt")
+            .replace("</robot>", "</robt>"),
+    );
+    let scene = l.scene(ROBOT_SCENE);
+    let before = l.hashes();
+    judge(
+        "<robt> root",
+        &l,
+        &before,
+        &check(&scene),
+        Expect::Error(&["robot.urdf", "<robt>"]),
+    );
+
+    // A truncated joints bag: cut inside the first record, and cut at a record boundary.
+    let l = Layout::new();
+    let scene = l.robot("../meshes/m.stl", "");
+    let full = l.path("scene/full.mcap");
+    joints_bag(&full);
+    let bytes = std::fs::read(&full).expect("read");
+    for (name, len) in [
+        ("bag cut at 20 bytes", 20usize),
+        ("bag cut at 60%", bytes.len() * 6 / 10),
+    ] {
+        let cut = l.write("scene/joints.mcap", &bytes[..len]);
+        let before = l.hashes();
+        let o = record(
+            &scene,
+            &l.path("scene/out.mcap"),
+            &["--joints", cut.to_str().expect("utf8")],
+        );
+        if len == 20 {
+            judge(
+                name,
+                &l,
+                &before,
+                &o,
+                Expect::Error(&["joints.mcap", "truncated"]),
+            );
+        } else {
+            // Messages before the cut are kept: a usable (shorter) joint stream.
+            judge(name, &l, &before, &o, Expect::Ok);
+        }
+    }
+
+    // A directory as the scene: the cause once, and the file first.
+    let l = Layout::new();
+    let before = l.hashes();
+    let o = check(&l.scene_dir);
+    judge(
+        "directory scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene", "directory"]),
+    );
+    if !report_only() {
+        assert_eq!(o.stderr.matches("directory").count(), 1, "{}", o.stderr);
+    }
+
+    // Errors start with the file, then the key; YAML errors give the place.
+    let l = Layout::new();
+    let scene = l.scene(&with(SCENE, "dt: 0.02", "dt: -1"));
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "negative dt",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["solver.dt"]),
+    );
+    let first = o.stderr.lines().next().unwrap_or("");
+    let starts = first.starts_with(&format!("drape: error: {}: solver.dt", scene.display()));
+    if report_only() && !starts {
+        eprintln!("FAIL error starts with the file, then the key: {first}");
+    } else {
+        assert!(starts, "{first}");
+    }
+    let scene = l.scene(&with(SCENE, "pins:", "materal: {}\n    pins:"));
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "misspelled key",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml", "materal", "line"]),
+    );
+    let scene = l.scene("\u{0}\u{1}binary");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "binary scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["scene.yaml"]),
+    );
+    let scene = l.write("scene/latin1.yaml", b"name: caf\xe9\n");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "not UTF-8",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["latin1.yaml", "UTF-8"]),
+    );
+}
+
+// ---------------------------------------------------------------- signals end every phase
+
+/// SIGTERM while the scene is still being built and its shirt sewn (before any frame is
+/// recorded) ends the run at once, with status 130 and no output left behind.
+#[test]
+fn a_signal_during_build_and_sewing_ends_the_run() {
+    let l = Layout::new();
+    let shirt = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/shirt.yaml");
+    let out = l.path("scene/out.mcap");
+    let mut child = Command::new(binary())
+        .args(["record", "--quiet", "--scene"])
+        .arg(&shirt)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drape");
+    std::thread::sleep(Duration::from_millis(200));
+    let sent = Instant::now();
+    let pid = libc::pid_t::try_from(child.id()).expect("pid");
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if sent.elapsed() > KILL_AFTER {
+            let _ = child.kill();
+            panic!("drape ignored SIGTERM during build");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert!(
+        sent.elapsed() < BUDGET,
+        "took {:?} after SIGTERM",
+        sent.elapsed()
+    );
+    if report_only() {
+        eprintln!("signal during build: {status} after {:?}", sent.elapsed());
+        return;
+    }
+    assert_eq!(status.code(), Some(130), "{status}");
+    assert!(!out.exists());
+    let left: Vec<_> = std::fs::read_dir(&l.scene_dir)
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
