@@ -4,9 +4,10 @@
 
 use crate::robot::RobotDriver;
 use crate::ros::msg::{
-    ColorRGBA, Header, JointState, Marker, PointCloud2, RosString, TFMessage, Time, Transform,
-    TransformStamped,
+    ColorRGBA, DiagnosticArray, Header, JointState, Marker, PointCloud2, RosString, TFMessage,
+    Time, Transform, TransformStamped,
 };
+use crate::ros::telemetry::{FrameQuality, RunQuality, RunSummary};
 use crate::ros::{
     mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro, Durability,
     Reliability, TopicId,
@@ -28,6 +29,9 @@ pub struct RecordOptions {
     /// Topics are `<prefix>/mesh` and `<prefix>/points`.
     pub topic_prefix: String,
     pub color: [f32; 4],
+    /// Also write each frame's step wall time on `/diagnostics` (off by default: with it the
+    /// same scene no longer gives the same bag bytes).
+    pub wall_time_in_bag: bool,
 }
 
 impl Default for RecordOptions {
@@ -39,6 +43,7 @@ impl Default for RecordOptions {
             frame_id: "world".into(),
             topic_prefix: "/drape".into(),
             color: [0.85, 0.35, 0.2, 1.0],
+            wall_time_in_bag: false,
         }
     }
 }
@@ -52,6 +57,42 @@ pub struct RecordSummary {
     pub subdivisions: u64,
     /// True when a stop request ended the run early.
     pub interrupted: bool,
+    /// Totals of the per-frame quality written on `/diagnostics`.
+    pub quality: RunQuality,
+    /// Wall time of the run (s).
+    pub wall_seconds: f64,
+}
+
+impl RecordSummary {
+    /// The run summary (table and JSON) of this recording.
+    pub fn run_summary(&self) -> RunSummary {
+        let q = &self.quality;
+        RunSummary {
+            frames: self.frames_written,
+            steps: self.steps,
+            substeps: q.substeps,
+            subdivisions: self.subdivisions,
+            cg_iterations_mean: if self.steps > 0 {
+                q.cg_iterations as f64 / self.steps as f64
+            } else {
+                0.0
+            },
+            cg_iterations_max: q.cg_iterations_max,
+            cg_residual_max: q.cg_residual_max,
+            contacts_max: q.contacts_max,
+            worst_penetration_m: q.worst_penetration,
+            worst_stretch: q.worst_stretch,
+            self_intersections_max: q.self_intersections_max,
+            simulated_s: self.simulated_seconds,
+            wall_s: self.wall_seconds,
+            real_time_factor: if self.wall_seconds > 0.0 {
+                self.simulated_seconds / self.wall_seconds
+            } else {
+                0.0
+            },
+            interrupted: self.interrupted,
+        }
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -71,6 +112,8 @@ pub enum RecordError {
 struct Topics {
     mesh: TopicId,
     points: TopicId,
+    /// `/diagnostics`: every frame's [`FrameQuality`].
+    diagnostics: TopicId,
     /// `/joint_states` and `/tf` when a robot is recorded.
     robot: Option<(TopicId, TopicId)>,
 }
@@ -118,6 +161,7 @@ pub fn record_with_robot(
             opts.distro,
             None,
         )?,
+        diagnostics: bag.add_topic::<DiagnosticArray>("/diagnostics", opts.distro, None)?,
         robot: None,
     };
     if let Some(d) = driver.as_deref() {
@@ -153,11 +197,15 @@ fn run(
     stop: &AtomicBool,
     progress: &mut impl FnMut(f64),
 ) -> Result<RecordSummary, RecordError> {
+    let started = std::time::Instant::now();
     let mut s = RecordSummary::default();
     let period = 1.0 / opts.publish_rate;
     let t_end = sim.time() + opts.duration;
     let eps = 1e-9 * sim.settings.dt;
-    write_frame(sim, driver.as_deref(), bag, topics, opts)?;
+    let mut quality = FrameQuality::default();
+    write_frame(sim, driver.as_deref(), bag, topics, opts, &mut quality)?;
+    s.quality.add_frame(&quality);
+    quality = FrameQuality::default();
     s.frames_written += 1;
     let mut next_publish = sim.time() + period;
     while sim.time() + eps < t_end {
@@ -174,8 +222,11 @@ fn run(
         })?;
         s.steps += 1;
         s.subdivisions += m.subdivisions as u64;
+        quality.add_step(m);
         if sim.time() + eps >= next_publish {
-            write_frame(sim, driver.as_deref(), bag, topics, opts)?;
+            write_frame(sim, driver.as_deref(), bag, topics, opts, &mut quality)?;
+            s.quality.add_frame(&quality);
+            quality = FrameQuality::default();
             s.frames_written += 1;
             // Skip publish instants a long frame step jumped over rather than bunching them.
             while next_publish <= sim.time() + eps {
@@ -185,6 +236,7 @@ fn run(
         progress(sim.time());
     }
     s.simulated_seconds = sim.time();
+    s.wall_seconds = started.elapsed().as_secs_f64();
     Ok(s)
 }
 
@@ -194,9 +246,13 @@ fn write_frame(
     bag: &mut BagWriter,
     topics: &Topics,
     opts: &RecordOptions,
+    quality: &mut FrameQuality,
 ) -> Result<(), BagError> {
     let ns = (sim.time() * 1e9).round().max(0.0) as u64;
     let stamp = Time::from_nanos(ns);
+    quality.at_frame(sim.time(), &sim.cloth);
+    let diagnostics = quality.diagnostics("drape", stamp, opts.wall_time_in_bag);
+    bag.write(topics.diagnostics, ns, &diagnostics)?;
     let c = &sim.cloth;
     let [r, g, b, a] = opts.color;
     let marker = mesh_marker(
