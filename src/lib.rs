@@ -22,6 +22,8 @@ pub mod ros;
 pub mod scene;
 pub mod sim;
 pub mod study;
+#[cfg(feature = "ros")]
+pub mod sweep;
 
 /// All simulation state is double precision: convergence-order and energy tests
 /// need the headroom, and the cost over f32 is small for scalar spring loops.
