@@ -16,6 +16,8 @@ pub mod hard;
 pub mod integrate;
 pub mod mesh;
 pub mod pose;
+#[cfg(feature = "ros")]
+pub mod render;
 pub mod robot;
 #[cfg(feature = "ros")]
 pub mod ros;
