@@ -712,7 +712,7 @@ mod tests {
         );
         let e = err("random:\n  solver.dt: { gaussian: [0.1, 0.01] }\n");
         assert!(
-            e.contains("random.solver.dt") && e.contains("unknown variant"),
+            e.contains("random.solver.dt") && e.contains("unknown draw"),
             "{e}"
         );
         let e = err("grid:\n  solver.dt: 0.1\n");
