@@ -150,7 +150,7 @@ fn bad_sweep_files_name_the_key_before_any_job_runs() {
         let err = stderr(&o);
         assert!(!o.status.success(), "{body}: accepted");
         assert!(
-            err.contains(&key),
+            err.contains(key),
             "{body}: error does not name {key}: {err}"
         );
         assert!(

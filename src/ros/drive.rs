@@ -10,7 +10,7 @@ pub enum DriveError {
     #[error("--joints {path}: {source}")]
     Bag {
         path: String,
-        source: crate::ros::BagError,
+        source: Box<crate::ros::BagError>,
     },
     #[error("--joints {path}: no usable /joint_states message ({dropped} dropped)")]
     Empty { path: String, dropped: usize },
@@ -22,7 +22,7 @@ pub fn drive_from_bag(d: &mut RobotDriver, bag: &Path) -> Result<(), DriveError>
     let path = bag.display().to_string();
     let msgs = crate::ros::read_joint_states(bag).map_err(|source| DriveError::Bag {
         path: path.clone(),
-        source,
+        source: Box::new(source),
     })?;
     let inputs = msgs.into_iter().map(|(ns, m)| {
         let velocities = (!m.velocity.is_empty()).then_some(m.velocity);
