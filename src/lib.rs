@@ -23,6 +23,8 @@ pub mod linalg;
 pub mod mesh;
 mod par;
 pub mod pose;
+#[cfg(feature = "ros")]
+pub mod render;
 pub mod robot;
 #[cfg(feature = "ros")]
 pub mod ros;
@@ -30,6 +32,8 @@ pub mod scene;
 pub mod sim;
 #[cfg(feature = "tools")]
 pub mod study;
+#[cfg(feature = "ros")]
+pub mod sweep;
 
 /// All simulation state is double precision: convergence-order and energy tests
 /// need the headroom, and the cost over f32 is small for scalar spring loops.

@@ -6,10 +6,12 @@ pub mod bag;
 pub mod cdr;
 pub mod convert;
 mod distro;
+pub mod drive;
 pub mod msg;
 pub mod node;
 pub mod qos;
 pub mod record;
+pub mod telemetry;
 
 pub use bag::{read_joint_states, read_topic, BagError, BagWriter, TopicId, TopicRead};
 pub use convert::{mesh_marker, point_cloud};

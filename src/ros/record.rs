@@ -9,9 +9,10 @@
 
 use crate::robot::RobotDriver;
 use crate::ros::msg::{
-    ColorRGBA, Header, JointState, Marker, PointCloud2, RosString, TFMessage, Time, Transform,
-    TransformStamped,
+    ColorRGBA, DiagnosticArray, Header, JointState, Marker, PointCloud2, RosString, TFMessage,
+    Time, Transform, TransformStamped,
 };
+use crate::ros::telemetry::{FrameQuality, RunQuality, RunSummary};
 use crate::ros::{
     mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro, Durability,
     Reliability, TopicId,
@@ -33,6 +34,9 @@ pub struct RecordOptions {
     /// Topics are `<prefix>/mesh` and `<prefix>/points`.
     pub topic_prefix: String,
     pub color: [f32; 4],
+    /// Also write each frame's step wall time on `/diagnostics` (off by default: with it the
+    /// same scene no longer gives the same bag bytes).
+    pub wall_time_in_bag: bool,
 }
 
 impl Default for RecordOptions {
@@ -44,6 +48,7 @@ impl Default for RecordOptions {
             frame_id: "world".into(),
             topic_prefix: "/drape".into(),
             color: [0.85, 0.35, 0.2, 1.0],
+            wall_time_in_bag: false,
         }
     }
 }
@@ -57,6 +62,42 @@ pub struct RecordSummary {
     pub subdivisions: u64,
     /// True when a stop request ended the run early.
     pub interrupted: bool,
+    /// Totals of the per-frame quality written on `/diagnostics`.
+    pub quality: RunQuality,
+    /// Wall time of the run (s).
+    pub wall_seconds: f64,
+}
+
+impl RecordSummary {
+    /// The run summary (table and JSON) of this recording.
+    pub fn run_summary(&self) -> RunSummary {
+        let q = &self.quality;
+        RunSummary {
+            frames: self.frames_written,
+            steps: self.steps,
+            substeps: q.substeps,
+            subdivisions: self.subdivisions,
+            cg_iterations_mean: if self.steps > 0 {
+                q.cg_iterations as f64 / self.steps as f64
+            } else {
+                0.0
+            },
+            cg_iterations_max: q.cg_iterations_max,
+            cg_residual_max: q.cg_residual_max,
+            contacts_max: q.contacts_max,
+            worst_penetration_m: q.worst_penetration,
+            worst_stretch: q.worst_stretch,
+            self_intersections_max: q.self_intersections_max,
+            simulated_s: self.simulated_seconds,
+            wall_s: self.wall_seconds,
+            real_time_factor: if self.wall_seconds > 0.0 {
+                self.simulated_seconds / self.wall_seconds
+            } else {
+                0.0
+            },
+            interrupted: self.interrupted,
+        }
+    }
 }
 
 /// Why a recording failed; each names the output file or what went wrong in the run.
@@ -137,6 +178,8 @@ fn staging_path(out: &Path) -> Result<Option<PathBuf>, RecordError> {
 struct Topics {
     mesh: TopicId,
     points: TopicId,
+    /// `/diagnostics`: every frame's [`FrameQuality`].
+    diagnostics: TopicId,
     /// `/joint_states` and `/tf` when a robot is recorded.
     robot: Option<(TopicId, TopicId)>,
 }
@@ -223,6 +266,7 @@ fn record_into(
             opts.distro,
             None,
         )?,
+        diagnostics: bag.add_topic::<DiagnosticArray>("/diagnostics", opts.distro, None)?,
         robot: None,
     };
     if let Some(d) = driver.as_deref() {
@@ -255,16 +299,25 @@ fn run(
     stop: &AtomicBool,
     progress: &mut impl FnMut(f64),
 ) -> Result<RecordSummary, RecordError> {
+    let started = std::time::Instant::now();
     let mut s = RecordSummary::default();
     let period = 1.0 / opts.publish_rate;
     let t_end = sim.time() + opts.duration;
     let eps = 1e-9 * sim.settings.dt;
     let start = sim.time();
-    let frame = |sim: &Simulation, driver: Option<&RobotDriver>, bag: &mut BagWriter, n: u64| {
+    // A frame is checked for finite values before any of it is written.
+    let frame = |sim: &Simulation,
+                 driver: Option<&RobotDriver>,
+                 bag: &mut BagWriter,
+                 n: u64,
+                 quality: &mut FrameQuality| {
         check_finite(sim, driver, out, n)?;
-        write_frame(sim, driver, bag, topics, opts).map_err(RecordError::from)
+        write_frame(sim, driver, bag, topics, opts, quality).map_err(RecordError::from)
     };
-    frame(sim, driver.as_deref(), bag, 0)?;
+    let mut quality = FrameQuality::default();
+    frame(sim, driver.as_deref(), bag, 0, &mut quality)?;
+    s.quality.add_frame(&quality);
+    quality = FrameQuality::default();
     s.frames_written += 1;
     // Publish instants are start + k * period, k counted (not summed, which stalls when the
     // period is below the time's resolution); the step count is bounded by the scene's checks.
@@ -284,8 +337,11 @@ fn run(
         })?;
         s.steps += 1;
         s.subdivisions += m.subdivisions as u64;
+        quality.add_step(m);
         if sim.time() + eps >= next_publish {
-            frame(sim, driver.as_deref(), bag, s.frames_written)?;
+            frame(sim, driver.as_deref(), bag, s.frames_written, &mut quality)?;
+            s.quality.add_frame(&quality);
+            quality = FrameQuality::default();
             s.frames_written += 1;
             // Skip publish instants a long frame step jumped over rather than bunching them.
             k = (((sim.time() + eps - start) / period).floor() + 1.0).max(k + 1.0);
@@ -294,6 +350,7 @@ fn run(
         progress(sim.time());
     }
     s.simulated_seconds = sim.time();
+    s.wall_seconds = started.elapsed().as_secs_f64();
     Ok(s)
 }
 
@@ -335,9 +392,13 @@ fn write_frame(
     bag: &mut BagWriter,
     topics: &Topics,
     opts: &RecordOptions,
+    quality: &mut FrameQuality,
 ) -> Result<(), BagError> {
     let ns = (sim.time() * 1e9).round().max(0.0) as u64;
     let stamp = Time::from_nanos(ns);
+    quality.at_frame(sim.time(), &sim.cloth);
+    let diagnostics = quality.diagnostics("drape", stamp, opts.wall_time_in_bag);
+    bag.write(topics.diagnostics, ns, &diagnostics)?;
     let c = &sim.cloth;
     let [r, g, b, a] = opts.color;
     let marker = mesh_marker(

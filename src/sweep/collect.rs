@@ -1,0 +1,207 @@
+//! `drape sweep collect DIR`: one manifest of a sweep's jobs from their result records, as JSON
+//! lines (`manifest.jsonl`) and CSV (`manifest.csv`), both readable by pandas.
+//!
+//! The output folder's `plan.json` (written by every `sweep run` and `sweep emit`) says which
+//! jobs exist, so jobs that never ran appear too: `missing`, or `failed` with the reason when a
+//! partial bag or a failed record is there. An `ok` record whose bag is gone or has another size
+//! is `failed` too.
+
+use super::job::{params_json, write_atomic, JobFiles, JobRecord, Status};
+use super::plan::{Job, Sweep, SweepError};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// `plan.json`: the jobs of a sweep, for collecting without the sweep file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanFile {
+    pub name: String,
+    pub sweep: PathBuf,
+    pub scene: PathBuf,
+    pub job_count: usize,
+    pub jobs: Vec<Job>,
+}
+
+/// Writes `plan.json` into `out` (atomically; concurrent writers write the same text).
+pub fn write_plan(sweep: &Sweep, out: &Path) -> Result<PathBuf, SweepError> {
+    std::fs::create_dir_all(out).map_err(|source| SweepError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let plan = PlanFile {
+        name: sweep.name.clone(),
+        sweep: sweep.path.clone(),
+        scene: sweep.scene_path.clone(),
+        job_count: sweep.job_count(),
+        jobs: sweep.jobs().collect(),
+    };
+    let path = out.join("plan.json");
+    let text = serde_json::to_string(&plan)
+        .map_err(|e| SweepError::Other(format!("cannot encode the plan: {e}")))?;
+    write_atomic(&path, &(text + "\n"))?;
+    Ok(path)
+}
+
+/// A collected manifest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Manifest {
+    pub entries: Vec<JobRecord>,
+    pub jsonl: PathBuf,
+    pub csv: PathBuf,
+}
+
+impl Manifest {
+    pub fn count(&self, status: Status) -> usize {
+        self.entries.iter().filter(|e| e.status == status).count()
+    }
+}
+
+/// Merges the job records of `out` into `manifest.jsonl` and `manifest.csv` there.
+pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
+    let plan_path = out.join("plan.json");
+    let text = std::fs::read_to_string(&plan_path).map_err(|source| SweepError::Io {
+        path: plan_path.clone(),
+        source,
+    })?;
+    let plan: PlanFile = serde_json::from_str(&text).map_err(|e| SweepError::Parse {
+        origin: plan_path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut entries = Vec::with_capacity(plan.jobs.len());
+    for job in &plan.jobs {
+        entries.push(entry(out, job));
+    }
+    let jsonl = out.join("manifest.jsonl");
+    let mut lines = String::new();
+    for e in &entries {
+        let line = serde_json::to_string(e)
+            .map_err(|e| SweepError::Other(format!("cannot encode a manifest line: {e}")))?;
+        lines.push_str(&line);
+        lines.push('\n');
+    }
+    write_atomic(&jsonl, &lines)?;
+    let csv = out.join("manifest.csv");
+    write_atomic(&csv, &to_csv(&entries))?;
+    Ok(Manifest {
+        entries,
+        jsonl,
+        csv,
+    })
+}
+
+fn entry(out: &Path, job: &Job) -> JobRecord {
+    let files = JobFiles::new(out, job.index);
+    let blank = |status, error: Option<String>| JobRecord {
+        index: job.index,
+        status,
+        params: params_json(job),
+        bag: None,
+        size: None,
+        sha256: None,
+        summary: None,
+        error,
+    };
+    match files.read_record() {
+        Some(mut r) if r.status == Status::Ok => {
+            let size = std::fs::metadata(&files.bag).ok().map(|m| m.len());
+            if size != r.size {
+                r.status = Status::Failed;
+                r.error = Some(match size {
+                    None => format!("its bag {} is missing", files.bag_rel),
+                    Some(s) => format!(
+                        "its bag {} has {s} bytes, the record says {:?}",
+                        files.bag_rel, r.size
+                    ),
+                });
+            }
+            r
+        }
+        Some(r) => r,
+        None if files.part.exists() => blank(
+            Status::Failed,
+            Some(format!(
+                "no result record; a partial bag {}.part is left (killed mid-run, or still running)",
+                files.bag_rel
+            )),
+        ),
+        None => blank(Status::Missing, None),
+    }
+}
+
+/// CSV with one row per job: index, status, bag, size, sha256, error, one column per sweep key
+/// (`param.<key>`) and one per summary field (`summary.<field>`). Lists are written as JSON.
+fn to_csv(entries: &[JobRecord]) -> String {
+    let mut param_keys: Vec<String> = Vec::new();
+    for e in entries {
+        for k in e.params.keys() {
+            if !param_keys.contains(k) {
+                param_keys.push(k.clone());
+            }
+        }
+    }
+    let summary_keys: Vec<String> =
+        match serde_json::to_value(crate::ros::telemetry::RunSummary::default()) {
+            Ok(serde_json::Value::Object(m)) => m.keys().cloned().collect(),
+            _ => Vec::new(),
+        };
+    let mut header: Vec<String> = ["index", "status", "bag", "size", "sha256", "error"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    header.extend(param_keys.iter().map(|k| format!("param.{k}")));
+    header.extend(summary_keys.iter().map(|k| format!("summary.{k}")));
+    let mut out = header
+        .iter()
+        .map(|h| field(h))
+        .collect::<Vec<_>>()
+        .join(",");
+    out.push('\n');
+    for e in entries {
+        let mut row = vec![
+            e.index.to_string(),
+            serde_json::to_value(e.status)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default(),
+            e.bag.clone().unwrap_or_default(),
+            e.size.map(|s| s.to_string()).unwrap_or_default(),
+            e.sha256.clone().unwrap_or_default(),
+            e.error.clone().unwrap_or_default(),
+        ];
+        for k in &param_keys {
+            row.push(e.params.get(k).map(scalar).unwrap_or_default());
+        }
+        let summary = e
+            .summary
+            .as_ref()
+            .and_then(|s| serde_json::to_value(s).ok());
+        for k in &summary_keys {
+            row.push(
+                summary
+                    .as_ref()
+                    .and_then(|s| s.get(k))
+                    .map(scalar)
+                    .unwrap_or_default(),
+            );
+        }
+        out.push_str(&row.iter().map(|f| field(f)).collect::<Vec<_>>().join(","));
+        out.push('\n');
+    }
+    out
+}
+
+fn scalar(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Null => String::new(),
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// RFC 4180 quoting where needed.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

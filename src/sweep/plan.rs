@@ -1,0 +1,731 @@
+//! Sweep files and their plan: which jobs a sweep has and each job's scene.
+//!
+//! ```yaml
+//! name: three_corner_materials
+//! scene: ../config/three_corner_normal.yaml    # relative to the sweep file
+//! out: runs/three_corner                       # output folder (default: <sweep>.out beside it)
+//! seed: 7                                      # random draws depend on the seed and job index only
+//! samples: 10                                  # random draws per grid point (default 1)
+//! set:                                         # applied to every job
+//!   duration: 2.0
+//! grid:                                        # every combination, the last key fastest
+//!   cloths[0].material.stretch: [1000, 2000]
+//!   effects: [[gravity, stretch, shear, bending, damping], [gravity, stretch, shear, bending, damping, wind]]
+//! random:
+//!   cloths[0].material.bend_warp: { log_uniform: [1.0e-4, 1.0e-2] }
+//!   wind.velocity[0]: { uniform: [0.0, 4.0] }
+//!   cloths[0].grid.pose.xyz: { jitter: [0.02, 0.02, 0.0] }   # base value + uniform(-a, a)
+//!   solver.substeps: { integer: [1, 3] }
+//!   cloths[0].grid.resolution: { choice: [[16, 16], [24, 24]] }
+//!   job.time_scale: { uniform: [0.8, 1.25] }   # robot trajectory times scaled (slower above 1)
+//! # job.joints: a `/joint_states` bag per job (grid list or choice), relative to the sweep file
+//! ```
+//!
+//! Key paths are the scene's own (`cloths[0].material.stretch`) and are set on the scene's YAML
+//! value before the scene's strict parse and validation, so a bad value gets the scene's own
+//! error, prefixed with the sweep key that set it. [`Sweep::load`] checks every key and every
+//! job's scene before returning, so a bad sweep fails before any job runs.
+//!
+//! Jobs are numbered `0..job_count()`: grid point `index / samples`, draw `index % samples`.
+
+use super::keypath::{describe, KeyPath};
+use super::rng::SplitMix64;
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use serde_yaml_ng::{Mapping, Value};
+use std::path::{Path, PathBuf};
+
+/// The sweep file as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    #[serde(default)]
+    pub name: String,
+    /// Base scene, relative to the sweep file.
+    pub scene: PathBuf,
+    /// Output folder, relative to the sweep file.
+    #[serde(default)]
+    pub out: Option<PathBuf>,
+    #[serde(default)]
+    pub seed: u64,
+    /// Random draws per grid point.
+    #[serde(default = "one")]
+    pub samples: usize,
+    /// Key path -> value, applied to every job.
+    #[serde(default)]
+    pub set: Mapping,
+    /// Key path -> list of values; jobs run every combination.
+    #[serde(default)]
+    pub grid: Mapping,
+    /// Key path -> draw.
+    #[serde(default)]
+    pub random: Mapping,
+}
+
+fn one() -> usize {
+    1
+}
+
+/// A random draw for one key.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Draw {
+    /// Uniform in `[lo, hi]`.
+    Uniform([f64; 2]),
+    /// `exp` of a uniform draw in `[ln lo, ln hi]` (`lo > 0`).
+    LogUniform([f64; 2]),
+    /// Integer in `lo..=hi`.
+    Integer([i64; 2]),
+    /// One of the values.
+    Choice(Vec<Value>),
+    /// The scene's value plus uniform(-a, a), per element for lists (initial pose jitter).
+    Jitter(Value),
+}
+
+impl Draw {
+    /// From its YAML form, a map with one key naming the draw: `{ uniform: [0, 1] }`.
+    pub fn from_value(v: &Value) -> Result<Draw, String> {
+        let m = match v {
+            Value::Mapping(m) if m.len() == 1 => m,
+            _ => return Err(format!("expected a draw, got {}", describe(v))),
+        };
+        let Some((k, arg)) = m.iter().next() else {
+            return Err("expected a draw".into());
+        };
+        let kind = k.as_str().unwrap_or_default();
+        let pair = |what: &str| -> Result<[f64; 2], String> {
+            serde_yaml_ng::from_value::<[f64; 2]>(arg.clone())
+                .map_err(|e| format!("{kind}: expected [lo, hi] {what}: {e}"))
+        };
+        match kind {
+            "uniform" => pair("numbers").map(Draw::Uniform),
+            "log_uniform" => pair("numbers").map(Draw::LogUniform),
+            "integer" => serde_yaml_ng::from_value::<[i64; 2]>(arg.clone())
+                .map(Draw::Integer)
+                .map_err(|e| format!("integer: expected [lo, hi] integers: {e}")),
+            "choice" => match arg {
+                Value::Sequence(l) => Ok(Draw::Choice(l.clone())),
+                other => Err(format!("choice: expected a list, got {}", describe(other))),
+            },
+            "jitter" => Ok(Draw::Jitter(arg.clone())),
+            other => Err(format!(
+                "unknown draw `{other}` (uniform, log_uniform, integer, choice, jitter)"
+            )),
+        }
+    }
+}
+
+/// What a sweep key varies.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// A key path in the scene.
+    Scene(KeyPath),
+    /// `job.joints`: drive the robot from this `/joint_states` bag.
+    Joints,
+    /// `job.time_scale`: every robot trajectory time multiplied by this.
+    TimeScale,
+}
+
+impl Target {
+    fn parse(key: &str) -> Result<Target, String> {
+        match key {
+            "job.joints" => Ok(Target::Joints),
+            "job.time_scale" => Ok(Target::TimeScale),
+            k if k.starts_with("job.") => Err(
+                "unknown job key (job.joints: a joint-states bag, job.time_scale: trajectory time scale)"
+                    .to_string(),
+            ),
+            k => KeyPath::parse(k).map(Target::Scene),
+        }
+    }
+}
+
+/// A sweep that cannot be planned or run; names the file and the key or job.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{origin}: {message}")]
+    Parse { origin: String, message: String },
+    /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
+    #[error("{origin}: {key}: {reason}")]
+    Key {
+        origin: String,
+        key: String,
+        reason: String,
+    },
+    #[error("{origin}: job {index} ({params}): {reason}")]
+    Job {
+        origin: String,
+        index: usize,
+        params: String,
+        reason: String,
+    },
+    #[error("job index {index} is out of range: the sweep has {count} jobs (0 to {})", count.saturating_sub(1))]
+    IndexOutOfRange { index: usize, count: usize },
+    #[error("{0}")]
+    Other(String),
+}
+
+/// One job of a sweep: its index and the values it sets, in the sweep file's key order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Job {
+    pub index: usize,
+    pub params: Vec<(String, Value)>,
+}
+
+impl Job {
+    /// `key=value, ...` for messages.
+    pub fn describe(&self) -> String {
+        self.params
+            .iter()
+            .map(|(k, v)| format!("{k}={}", inline(v)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// A value on one line (YAML flow style via JSON).
+pub fn inline(v: &Value) -> String {
+    serde_json::to_string(v).unwrap_or_else(|_| format!("{v:?}"))
+}
+
+/// What a job runs: its scene and, with `job.joints`, the bag that drives the robot.
+#[derive(Debug, Clone)]
+pub struct JobSpec {
+    pub scene: Scene,
+    pub joints: Option<PathBuf>,
+}
+
+/// A loaded, checked sweep.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// The sweep file.
+    pub path: PathBuf,
+    pub name: String,
+    /// The base scene file.
+    pub scene_path: PathBuf,
+    /// Default output folder (from the file, else `<sweep>.out` beside it).
+    pub out_dir: PathBuf,
+    base: Value,
+    axes: Vec<(String, Target, Vec<Value>)>,
+    draws: Vec<(String, Target, Draw)>,
+    samples: usize,
+    seed: u64,
+    count: usize,
+}
+
+impl Sweep {
+    /// Reads and checks a sweep file: every key path, value type and range, and the scene of
+    /// every job (the scene's strict parse and validation), so that a bad sweep fails here,
+    /// before any job runs.
+    pub fn load(path: &Path) -> Result<Sweep, SweepError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let sweep = Self::from_yaml(&text, path)?;
+        for i in 0..sweep.count {
+            sweep.job_spec(&sweep.job(i)?)?;
+        }
+        Ok(sweep)
+    }
+
+    /// Reads a sweep file and checks each key, but not every job's scene: what one array task
+    /// needs before running its own job (the whole plan was checked by `plan`, `emit` or
+    /// `run --local`).
+    pub fn open(path: &Path) -> Result<Sweep, SweepError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_yaml(&text, path)
+    }
+
+    /// Parses a sweep file's text (`path` locates the scene and names errors) and checks each
+    /// key on its own; [`Sweep::load`] also checks every job.
+    pub fn from_yaml(text: &str, path: &Path) -> Result<Sweep, SweepError> {
+        let origin = path.display().to_string();
+        let key_err = |key: &str, reason: String| SweepError::Key {
+            origin: origin.clone(),
+            key: key.to_string(),
+            reason,
+        };
+        let file: SweepFile = serde_yaml_ng::from_str(text).map_err(|e| SweepError::Parse {
+            origin: origin.clone(),
+            message: e.to_string(),
+        })?;
+        if file.samples == 0 {
+            return Err(key_err("samples", "must be at least 1".into()));
+        }
+        let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        let scene_path = dir.join(&file.scene);
+        let scene_text = std::fs::read_to_string(&scene_path).map_err(|e| SweepError::Key {
+            origin: origin.clone(),
+            key: "scene".into(),
+            reason: format!("cannot read {}: {e}", scene_path.display()),
+        })?;
+        let mut base: Value =
+            serde_yaml_ng::from_str(&scene_text).map_err(|e| SweepError::Parse {
+                origin: scene_path.display().to_string(),
+                message: e.to_string(),
+            })?;
+        let key_of = |k: &Value, section: &str| -> Result<String, SweepError> {
+            k.as_str().map(str::to_string).ok_or_else(|| {
+                key_err(
+                    section,
+                    format!("keys must be key paths (strings), got {}", inline(k)),
+                )
+            })
+        };
+
+        for (k, v) in &file.set {
+            let key = key_of(k, "set")?;
+            let target = Target::parse(&key).map_err(|r| key_err(&format!("set.{key}"), r))?;
+            let Target::Scene(kp) = target else {
+                return Err(key_err(
+                    &format!("set.{key}"),
+                    "job keys vary per job: put them under grid or random".into(),
+                ));
+            };
+            kp.set(&mut base, v.clone())
+                .map_err(|r| key_err(&format!("set.{key}"), r))?;
+        }
+
+        let mut seen: Vec<String> = Vec::new();
+        let mut axes = Vec::new();
+        for (k, v) in &file.grid {
+            let key = key_of(k, "grid")?;
+            let name = format!("grid.{key}");
+            let target = Target::parse(&key).map_err(|r| key_err(&name, r))?;
+            let Value::Sequence(values) = v else {
+                return Err(key_err(
+                    &name,
+                    format!("must be a list of values, got {}", describe(v)),
+                ));
+            };
+            if values.is_empty() {
+                return Err(key_err(&name, "empty list: no values to run".into()));
+            }
+            if seen.contains(&key) {
+                return Err(key_err(&name, "varied twice".into()));
+            }
+            seen.push(key.clone());
+            axes.push((key, target, values.clone()));
+        }
+        let mut draws = Vec::new();
+        for (k, v) in &file.random {
+            let key = key_of(k, "random")?;
+            let name = format!("random.{key}");
+            let target = Target::parse(&key).map_err(|r| key_err(&name, r))?;
+            let draw = Draw::from_value(v).map_err(|e| {
+                key_err(
+                    &name,
+                    format!(
+                        "{e} (a draw is {{ uniform: [lo, hi] }}, {{ log_uniform: [lo, hi] }}, \
+                         {{ integer: [lo, hi] }}, {{ choice: [..] }} or {{ jitter: a }})"
+                    ),
+                )
+            })?;
+            check_draw(&draw, &target, &base).map_err(|r| key_err(&name, r))?;
+            if seen.contains(&key) {
+                return Err(key_err(&name, "varied twice (also under grid)".into()));
+            }
+            seen.push(key.clone());
+            draws.push((key, target, draw));
+        }
+
+        let mut count = file.samples;
+        for (_, _, values) in &axes {
+            count = count.checked_mul(values.len()).ok_or_else(|| {
+                SweepError::Other(format!("{origin}: too many jobs (the grid overflows)"))
+            })?;
+        }
+        let out_dir = match &file.out {
+            Some(o) => dir.join(o),
+            None => dir.join(format!(
+                "{}.out",
+                path.file_stem().and_then(|s| s.to_str()).unwrap_or("sweep")
+            )),
+        };
+        let name = if file.name.is_empty() {
+            path.file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("sweep")
+                .to_string()
+        } else {
+            file.name.clone()
+        };
+        let sweep = Sweep {
+            path: path.to_path_buf(),
+            name,
+            scene_path,
+            out_dir,
+            base,
+            axes,
+            draws,
+            samples: file.samples,
+            seed: file.seed,
+            count,
+        };
+        sweep.check_keys_alone()?;
+        Ok(sweep)
+    }
+
+    /// Each grid value, and each draw of job 0, set over job 0's other values must parse: an
+    /// error there belongs to that key (the scene may need the other keys to be valid, e.g. a
+    /// `wind` effect and a drawn `wind.velocity`).
+    fn check_keys_alone(&self) -> Result<(), SweepError> {
+        let origin = self.path.display().to_string();
+        let first = self.job(0)?;
+        let mut singles: Vec<(String, String, Value)> = Vec::new();
+        for (key, _, values) in &self.axes {
+            for v in values {
+                singles.push((format!("grid.{key}"), key.clone(), v.clone()));
+            }
+        }
+        for (key, _, _) in &self.draws {
+            if let Some((_, v)) = first.params.iter().find(|(k, _)| k == key) {
+                singles.push((format!("random.{key}"), key.clone(), v.clone()));
+            }
+        }
+        for (name, key, v) in singles {
+            let params: Vec<(String, Value)> = first
+                .params
+                .iter()
+                .map(|(k, old)| (k.clone(), if *k == key { v.clone() } else { old.clone() }))
+                .collect();
+            let err = |reason: String| SweepError::Key {
+                origin: origin.clone(),
+                key: name.clone(),
+                reason: format!("value {}: {reason}", inline(&v)),
+            };
+            let (doc, _) = self.document(&params).map_err(|(k, r)| {
+                if k == key {
+                    err(r)
+                } else {
+                    SweepError::Key {
+                        origin: origin.clone(),
+                        key: k,
+                        reason: r,
+                    }
+                }
+            })?;
+            self.parse_scene(&doc, &name).map_err(err)?;
+        }
+        Ok(())
+    }
+
+    /// The base scene with `params` set (scene keys in order, then the trajectory scale, which
+    /// reads the final trajectory), and the joints bag if one is named. Errors name the key.
+    fn document(
+        &self,
+        params: &[(String, Value)],
+    ) -> Result<(Value, Option<PathBuf>), (String, String)> {
+        let mut doc = self.base.clone();
+        let mut joints = None;
+        let mut scale = None;
+        for (key, value) in params {
+            let target = Target::parse(key).map_err(|r| (key.clone(), r))?;
+            if target == Target::TimeScale {
+                scale = Some((key, value));
+                continue;
+            }
+            apply(&mut doc, &target, value, &self.path, &mut joints)
+                .map_err(|r| (key.clone(), r))?;
+        }
+        if let Some((key, v)) = scale {
+            apply(&mut doc, &Target::TimeScale, v, &self.path, &mut joints)
+                .map_err(|r| (key.clone(), r))?;
+        }
+        Ok((doc, joints))
+    }
+
+    pub fn job_count(&self) -> usize {
+        self.count
+    }
+
+    /// The values job `index` sets.
+    pub fn job(&self, index: usize) -> Result<Job, SweepError> {
+        if index >= self.count {
+            return Err(SweepError::IndexOutOfRange {
+                index,
+                count: self.count,
+            });
+        }
+        let mut params = Vec::new();
+        let mut point = index / self.samples;
+        let mut picks = vec![0; self.axes.len()];
+        for (a, (_, _, values)) in self.axes.iter().enumerate().rev() {
+            picks[a] = point % values.len();
+            point /= values.len();
+        }
+        for (a, (key, _, values)) in self.axes.iter().enumerate() {
+            params.push((key.clone(), values[picks[a]].clone()));
+        }
+        let mut rng = SplitMix64::for_job(self.seed, index);
+        for (key, target, draw) in &self.draws {
+            params.push((key.clone(), sample(draw, target, &self.base, &mut rng)));
+        }
+        Ok(Job { index, params })
+    }
+
+    /// Job `job`'s scene, parsed and validated.
+    pub fn job_spec(&self, job: &Job) -> Result<JobSpec, SweepError> {
+        let fail = |reason: String| SweepError::Job {
+            origin: self.path.display().to_string(),
+            index: job.index,
+            params: job.describe(),
+            reason,
+        };
+        let (doc, joints) = self
+            .document(&job.params)
+            .map_err(|(k, r)| fail(format!("{k}: {r}")))?;
+        let scene = self
+            .parse_scene(&doc, &format!("job {}", job.index))
+            .map_err(fail)?;
+        Ok(JobSpec { scene, joints })
+    }
+
+    fn parse_scene(&self, doc: &Value, what: &str) -> Result<Scene, String> {
+        let text = serde_yaml_ng::to_string(doc).map_err(|e| e.to_string())?;
+        let origin = format!("{} ({what})", self.scene_path.display());
+        let mut scene = Scene::from_yaml(&text, &origin).map_err(|e| e.to_string())?;
+        scene.base_dir = self.scene_path.parent().map(Path::to_path_buf);
+        Ok(scene)
+    }
+
+    /// Every job's values, for the plan file and `drape sweep plan`.
+    pub fn jobs(&self) -> impl Iterator<Item = Job> + '_ {
+        (0..self.count).filter_map(|i| self.job(i).ok())
+    }
+}
+
+/// Sets one sweep value on the scene document (or records the joints bag).
+fn apply(
+    doc: &mut Value,
+    target: &Target,
+    value: &Value,
+    sweep_path: &Path,
+    joints: &mut Option<PathBuf>,
+) -> Result<(), String> {
+    match target {
+        Target::Scene(kp) => kp.set(doc, value.clone()),
+        Target::Joints => {
+            let s = value
+                .as_str()
+                .ok_or_else(|| format!("must be a bag path, got {}", describe(value)))?;
+            let p = sweep_path.parent().unwrap_or(Path::new("")).join(s);
+            if !p.is_file() {
+                return Err(format!("no such bag: {}", p.display()));
+            }
+            *joints = Some(p);
+            Ok(())
+        }
+        Target::TimeScale => {
+            let s = value
+                .as_f64()
+                .filter(|s| s.is_finite() && *s > 0.0)
+                .ok_or_else(|| format!("must be a number > 0, got {}", inline(value)))?;
+            let points = KeyPath::parse("robot.trajectory.points")
+                .ok()
+                .and_then(|k| k.get(doc).cloned());
+            let Some(Value::Sequence(mut points)) = points else {
+                return Err("the scene has no robot trajectory to scale".into());
+            };
+            for p in &mut points {
+                if let Some(t) = p.get_mut("t") {
+                    let scaled = t.as_f64().map(|t| t * s);
+                    if let Some(x) = scaled {
+                        *t = Value::from(x);
+                    }
+                }
+            }
+            KeyPath::parse("robot.trajectory.points")
+                .map_err(|e| e.to_string())?
+                .set(doc, Value::Sequence(points))
+        }
+    }
+}
+
+fn check_draw(draw: &Draw, target: &Target, base: &Value) -> Result<(), String> {
+    let finite = |r: &[f64; 2]| r[0].is_finite() && r[1].is_finite();
+    match draw {
+        Draw::Uniform(r) if !finite(r) || r[1] < r[0] => {
+            Err(format!("empty range [{}, {}]: needs lo <= hi", r[0], r[1]))
+        }
+        Draw::LogUniform(r) if !finite(r) || r[1] < r[0] || r[0] <= 0.0 => Err(format!(
+            "empty range [{}, {}]: needs 0 < lo <= hi",
+            r[0], r[1]
+        )),
+        Draw::Integer(r) if r[1] < r[0] => {
+            Err(format!("empty range [{}, {}]: needs lo <= hi", r[0], r[1]))
+        }
+        Draw::Choice(v) if v.is_empty() => Err("empty choice: no values to draw from".into()),
+        Draw::Jitter(a) => {
+            let Target::Scene(kp) = target else {
+                return Err("jitter applies to scene values only".into());
+            };
+            let around = kp.get(base).ok_or_else(|| {
+                "jitter needs a value in the scene to jitter around (set it under `set`)"
+                    .to_string()
+            })?;
+            let (n_base, n_amp) = (numbers(around), numbers(a));
+            match (n_base, n_amp) {
+                (Some(b), Some(amp)) if amp.len() == 1 || amp.len() == b.len() => {
+                    if amp.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                        Ok(())
+                    } else {
+                        Err("jitter amplitudes must be >= 0".into())
+                    }
+                }
+                (None, _) => Err(format!(
+                    "jitter needs a number or a list of numbers, the scene has {}",
+                    describe(around)
+                )),
+                _ => Err("jitter needs one amplitude or one per element".into()),
+            }
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A number or a list of numbers as f64s.
+fn numbers(v: &Value) -> Option<Vec<f64>> {
+    match v {
+        Value::Number(_) => v.as_f64().map(|x| vec![x]),
+        Value::Sequence(l) => l.iter().map(Value::as_f64).collect(),
+        _ => None,
+    }
+}
+
+fn sample(draw: &Draw, target: &Target, base: &Value, rng: &mut SplitMix64) -> Value {
+    match draw {
+        Draw::Uniform([lo, hi]) => Value::from(lo + (hi - lo) * rng.next_f64()),
+        Draw::LogUniform([lo, hi]) => {
+            let (a, b) = (lo.ln(), hi.ln());
+            Value::from((a + (b - a) * rng.next_f64()).exp())
+        }
+        Draw::Integer([lo, hi]) => {
+            let span = (hi - lo) as u64 + 1;
+            Value::from(lo + rng.below(span) as i64)
+        }
+        Draw::Choice(values) => values[rng.below(values.len() as u64) as usize].clone(),
+        Draw::Jitter(a) => {
+            let Target::Scene(kp) = target else {
+                return Value::Null;
+            };
+            let around = kp.get(base).cloned().unwrap_or(Value::Null);
+            let amp = numbers(a).unwrap_or_default();
+            let mut jitter = |i: usize, x: f64| {
+                let a = amp.get(i).or(amp.first()).copied().unwrap_or(0.0);
+                Value::from(x + a * (2.0 * rng.next_f64() - 1.0))
+            };
+            match around {
+                Value::Sequence(l) => Value::Sequence(
+                    l.iter()
+                        .enumerate()
+                        .map(|(i, x)| jitter(i, x.as_f64().unwrap_or(0.0)))
+                        .collect(),
+                ),
+                v => jitter(0, v.as_f64().unwrap_or(0.0)),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sweep(body: &str) -> Result<Sweep, SweepError> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
+        let text = format!("scene: three_corner_normal.yaml\nseed: 5\n{body}");
+        Sweep::from_yaml(&text, &dir.join("test_sweep.yaml"))
+    }
+
+    #[test]
+    fn grid_order_and_samples() {
+        let s = sweep("samples: 2\ngrid:\n  duration: [1.0, 2.0]\n  solver.substeps: [1, 2, 3]\n")
+            .unwrap();
+        assert_eq!(s.job_count(), 12);
+        let v = |i: usize| -> (f64, u64) {
+            let j = s.job(i).unwrap();
+            (
+                j.params[0].1.as_f64().unwrap(),
+                j.params[1].1.as_u64().unwrap(),
+            )
+        };
+        assert_eq!(v(0), (1.0, 1));
+        assert_eq!(v(1), (1.0, 1));
+        assert_eq!(v(2), (1.0, 2));
+        assert_eq!(v(6), (2.0, 1));
+        assert_eq!(v(11), (2.0, 3));
+        let spec = s.job_spec(&s.job(11).unwrap()).unwrap();
+        assert_eq!(spec.scene.duration, 2.0);
+        assert_eq!(spec.scene.solver.substeps, 3);
+        assert!(matches!(
+            s.job(12),
+            Err(SweepError::IndexOutOfRange {
+                index: 12,
+                count: 12
+            })
+        ));
+    }
+
+    #[test]
+    fn draws_stay_in_their_ranges() {
+        let s = sweep(
+            "samples: 50\nrandom:\n  cloths[0].material.stretch: { uniform: [1000, 2000] }\n  \
+             cloths[0].material.bend_warp: { log_uniform: [1.0e-4, 1.0e-2] }\n  \
+             solver.substeps: { integer: [1, 3] }\n  cloths[0].grid.pose.xyz: { jitter: 0.1 }\n",
+        )
+        .unwrap();
+        let mut substeps = std::collections::BTreeSet::new();
+        for j in s.jobs() {
+            let k = j.params[0].1.as_f64().unwrap();
+            assert!((1000.0..=2000.0).contains(&k));
+            let b = j.params[1].1.as_f64().unwrap();
+            assert!((1e-4..=1e-2).contains(&b));
+            substeps.insert(j.params[2].1.as_u64().unwrap());
+            let z = j.params[3].1.as_sequence().unwrap()[2].as_f64().unwrap();
+            assert!((z - 1.0).abs() <= 0.1);
+        }
+        assert_eq!(substeps.into_iter().collect::<Vec<_>>(), [1, 2, 3]);
+    }
+
+    #[test]
+    fn bad_keys_are_named() {
+        let err = |body: &str| sweep(body).unwrap_err().to_string();
+        let e = err("grid:\n  cloths[0].material.stiffnes: [1]\n");
+        assert!(
+            e.contains("grid.cloths[0].material.stiffnes") && e.contains("unknown field"),
+            "{e}"
+        );
+        let e = err("random:\n  solver.dt: { uniform: [0.1, 0.01] }\n");
+        assert!(
+            e.contains("random.solver.dt") && e.contains("empty range"),
+            "{e}"
+        );
+        let e = err("random:\n  solver.dt: { gaussian: [0.1, 0.01] }\n");
+        assert!(
+            e.contains("random.solver.dt") && e.contains("unknown draw"),
+            "{e}"
+        );
+        let e = err("grid:\n  solver.dt: 0.1\n");
+        assert!(
+            e.contains("grid.solver.dt") && e.contains("must be a list"),
+            "{e}"
+        );
+        let e = err("grid:\n  job.speed: [1]\n");
+        assert!(
+            e.contains("grid.job.speed") && e.contains("unknown job key"),
+            "{e}"
+        );
+        let e = err("samples: 0\n");
+        assert!(e.contains("samples"), "{e}");
+    }
+}
