@@ -2,8 +2,9 @@
 //! the visual scene's node transforms, converted to metres (`<unit meter>`) and to Z-up
 //! (`<up_axis>`), the convention of URDF link frames.
 
+use super::data::TriMeshData;
+use super::error::MeshError;
 use super::xml::{self, Element};
-use super::{MeshError, TriMeshData};
 use crate::Vec3;
 use glam::{DMat4, DQuat};
 use std::collections::HashMap;

@@ -1,6 +1,7 @@
 //! Wavefront OBJ via `tobj`, triangulating polygons; materials are not read.
 
-use super::{MeshError, TriMeshData};
+use super::data::TriMeshData;
+use super::error::MeshError;
 use crate::Vec3;
 use std::path::Path;
 
@@ -44,7 +45,7 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
                 .collect(),
         };
         // Validate per object before offsetting so an error names the real index.
-        super::validate_indices(path, &part)?;
+        super::data::validate_indices(path, &part)?;
         mesh.append(&part);
     }
     Ok(mesh)

@@ -2,7 +2,7 @@
 //! mean of its vertices, and drop triangles that collapse. Crude but robust on any triangle
 //! soup, and enough to cap the cost of dense robot meshes used as collision obstacles.
 
-use super::TriMeshData;
+use super::data::TriMeshData;
 use crate::Vec3;
 use std::collections::{HashMap, HashSet};
 

@@ -1,7 +1,8 @@
 //! STL (binary and ASCII). Binary files are parsed here so the triangle count in the header can
 //! be checked against the file size before anything is allocated; ASCII goes through `stl_io`.
 
-use super::{MeshError, TriMeshData};
+use super::data::TriMeshData;
+use super::error::MeshError;
 use crate::Vec3;
 use std::collections::HashMap;
 use std::path::Path;

@@ -11,9 +11,10 @@
 //! ```
 
 mod build;
+mod problem;
 mod validate;
 
-pub use validate::{Problem, MAX_VERTICES};
+pub use problem::{Problem, MAX_VERTICES};
 
 pub use build::{build, build_with_robot};
 

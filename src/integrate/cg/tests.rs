@@ -1,0 +1,41 @@
+//! Unit tests of `cg.rs`, in their own file so that the test helpers they use
+//! (which use `cg.rs` themselves) do not make an import cycle with it.
+
+use super::*;
+use crate::integrate::test_systems::*;
+/// The start from the span of two directions: exact (no iteration) when the solution lies
+/// in it, while the first direction alone needs iterations; a useless second direction
+/// (parallel to the first, or not finite) falls back to the first alone.
+#[test]
+fn start_directions_span_the_solution() {
+    let a = cloth_system(12);
+    let n = a.rows();
+    let mut rng = Rng(21);
+    let (filt, z) = constraints(n, &mut rng);
+    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+    let e: Vec<Vec3> = (0..n).map(|_| rng.vec3() * 0.1).collect();
+    // x = (g - h) / 0.3 on the free components.
+    let g: Vec<Vec3> = x.iter().zip(&e).map(|(x, e)| *x * 0.3 + *e).collect();
+    let run = |second: Option<&[Vec3]>| {
+        let mut dv = g.clone();
+        let s = Pcg::default().solve(&a, &filt, &b, &z, None, 1e-9, 10_000, &mut dv, second);
+        (dv, s)
+    };
+    let (dv, two) = run(Some(&e));
+    assert_eq!(two.iterations, 0, "{two:?}");
+    let scale = x.iter().map(|v| v.length()).fold(0.0, f64::max);
+    for i in 0..n {
+        assert!((dv[i] - x[i]).length() <= 1e-6 * scale, "vertex {i}");
+    }
+    let (_, one) = run(None);
+    assert!(one.iterations > 5, "{one:?}");
+    let parallel: Vec<Vec3> = g.iter().map(|v| *v * 2.0).collect();
+    let mut bad = e.clone();
+    bad[3] = Vec3::NAN;
+    for second in [&parallel, &bad] {
+        let (dv, s) = run(Some(second));
+        assert_eq!(s.iterations, one.iterations, "{s:?} vs {one:?}");
+        assert!(s.residual <= 1e-9 && dv.iter().all(|v| v.is_finite()));
+    }
+}

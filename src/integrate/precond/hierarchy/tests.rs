@@ -1,0 +1,87 @@
+//! Unit tests of `hierarchy.rs`, in their own file so that the test helpers they use
+//! (which use `hierarchy.rs` themselves) do not make an import cycle with it.
+
+use super::*;
+use crate::integrate::cg::Pcg;
+use crate::integrate::test_systems::*;
+use crate::linalg::{Filter, PatternBuilder};
+use crate::{Mat3, Vec3};
+
+/// A rebuild along the kept aggregates reproduces a full build of the same matrix exactly
+/// (same aggregates and damping, so the same numbers); rebuilt for a rotated cloth
+/// (`R A R^T` blockwise) it preconditions as well as a fresh build (iterations within one),
+/// while the stale hierarchy of the unrotated cloth does not (measured: 19 and 20
+/// iterations, stale 167).
+#[test]
+fn rebuild_along_kept_aggregates_follows_a_rotation() {
+    let a = cloth_system(32);
+    let n = a.rows();
+    let filt = vec![Filter::Free; n];
+    let mut fine = Csr::default();
+    fine.filtered(&a, &filt);
+    let mut full = Multigrid::build(fine.clone()).expect("hierarchy");
+    let mut kept = Multigrid::build(fine.clone()).expect("hierarchy");
+    kept.rebuild(fine).expect("rebuild");
+    let mut rng = Rng(17);
+    let u: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let (mut zf, mut zk) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    full.apply(&u, &mut zf);
+    kept.apply(&u, &mut zk);
+    assert_eq!(zf, zk);
+    // Rotate every block by 60 degrees about x: the springs point elsewhere.
+    let r = Mat3::from_rotation_x(std::f64::consts::FRAC_PI_3);
+    let mut p = PatternBuilder::new();
+    for i in 0..n {
+        for &j in a.row(i).0 {
+            p.couple(i as u32, j);
+        }
+    }
+    let mut rotated = p.build(n);
+    for i in 0..n {
+        let (cols, vals) = a.row(i);
+        for (&j, m) in cols.iter().zip(vals) {
+            rotated.add(i as u32, j, r * *m * r.transpose());
+        }
+    }
+    let mut fine = Csr::default();
+    fine.filtered(&rotated, &filt);
+    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let z = vec![Vec3::ZERO; n];
+    let iterations = |mg: &mut Multigrid| {
+        let mut dv = vec![Vec3::ZERO; n];
+        Pcg::default()
+            .solve(&rotated, &filt, &b, &z, Some(mg), 1e-8, 1000, &mut dv, None)
+            .iterations
+    };
+    let mut fresh = Multigrid::build(fine.clone()).expect("hierarchy");
+    kept.refresh_finest(fine.clone()).expect("refresh");
+    let stale_its = iterations(&mut kept);
+    kept.rebuild(fine).expect("rebuild");
+    let (kept_its, fresh_its) = (iterations(&mut kept), iterations(&mut fresh));
+    assert!(kept_its <= fresh_its + 1, "{kept_its} vs fresh {fresh_its}");
+    assert!(
+        stale_its > fresh_its + 1,
+        "stale {stale_its} vs fresh {fresh_its}"
+    );
+}
+
+#[test]
+fn degenerate_matrix_falls_back_to_block_jacobi() {
+    // A zero diagonal block (massless, unconnected vertex) makes the hierarchy fail...
+    let mut a = cloth_system(6);
+    let mut p = PatternBuilder::new();
+    p.couple(0, 1);
+    let mut bad = p.build(2);
+    bad.add(0, 0, Mat3::IDENTITY);
+    let mut fine = Csr::default();
+    fine.filtered(&bad, &[Filter::Free, Filter::Free]);
+    assert_eq!(
+        Multigrid::build(fine).err(),
+        Some(MultigridError::SingularDiagonal { level: 0, row: 1 })
+    );
+    // ...and the block-Jacobi solve of a healthy system stays finite and converges.
+    a.add_diagonal(&[0.0; 36]);
+    let b = vec![Vec3::X; 36];
+    let (dv, s) = solve(&a, &[Filter::Free; 36], &b, &[Vec3::ZERO; 36], false, 1e-8);
+    assert!(s.residual <= 1e-8 && dv.iter().all(|v| v.is_finite()));
+}

@@ -1,0 +1,59 @@
+//! [`MeshError`]: why a mesh file could not be used, naming the file. Its own file so the
+//! parsers (stl, obj, dae) and the dispatch in `mod.rs` share it without a cycle.
+
+use crate::Vec3;
+use std::path::{Path, PathBuf};
+
+/// Why a mesh file could not be used; always carries the file path.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// A regular file, within the mesh size cap, is required (see `crate::input`).
+    #[error(transparent)]
+    Input(Box<crate::input::InputError>),
+    #[error("mesh {path}: cannot read file")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("mesh {path}: unsupported extension (expected .stl, .obj or .dae)")]
+    UnsupportedFormat { path: PathBuf },
+    #[error("mesh {path}: {message}")]
+    Malformed { path: PathBuf, message: String },
+    #[error("mesh {path}: not a valid OBJ file")]
+    Obj {
+        path: PathBuf,
+        #[source]
+        source: tobj::LoadError,
+    },
+    #[error("mesh {path}: not a valid ASCII STL file")]
+    AsciiStl {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("mesh {path}: contains no triangles")]
+    Empty { path: PathBuf },
+    #[error(
+        "mesh {path}: triangle {triangle} references vertex {index} but there are only {count}"
+    )]
+    IndexOutOfRange {
+        path: PathBuf,
+        triangle: usize,
+        index: u32,
+        count: usize,
+    },
+    #[error("mesh {path}: vertex {index} has a non-finite coordinate")]
+    NonFinite { path: PathBuf, index: usize },
+    #[error("mesh {path}: scale {scale} must be finite and non-zero on every axis")]
+    BadScale { path: PathBuf, scale: Vec3 },
+}
+
+impl MeshError {
+    pub(crate) fn malformed(path: &Path, message: impl Into<String>) -> Self {
+        MeshError::Malformed {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
