@@ -11,6 +11,7 @@
 //! threads give the same bytes). Step wall time is therefore kept out of sweep bags.
 
 pub mod collect;
+pub mod draw;
 pub mod emit;
 pub mod job;
 pub mod keypath;
@@ -19,9 +20,10 @@ pub mod pool;
 mod rng;
 
 pub use collect::{collect, write_plan, Manifest, PlanFile};
+pub use draw::{Draw, Target};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};
 pub use keypath::KeyPath;
-pub use plan::{Draw, Job, JobSpec, Sweep, SweepError, SweepFile};
+pub use plan::{Job, JobSpec, Sweep, SweepError, SweepFile};
 pub use pool::{run_local, PoolOptions, PoolReport};
 
 /// What `drape sweep plan` prints: the job count and the first `show` jobs' values.
