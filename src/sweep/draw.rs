@@ -80,8 +80,6 @@ impl Target {
     }
 }
 
-/// A sweep that cannot be planned or run; names the file and the key or job.
-
 pub(super) fn check_draw(draw: &Draw, target: &Target, base: &Value) -> Result<(), String> {
     let finite = |r: &[f64; 2]| r[0].is_finite() && r[1].is_finite();
     match draw {

@@ -67,6 +67,7 @@ fn one() -> usize {
     1
 }
 
+/// A sweep that cannot be planned or run; names the file and the key or job.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
     #[error("cannot read {path}: {source}")]
