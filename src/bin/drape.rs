@@ -471,8 +471,13 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
     p.apply_overrides(&ra.overrides)?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
-        .context("cannot install the Ctrl-C handler")?;
+    // The stop flag ends the run loop; the cancellation flag ends a scene build in progress
+    // (sewing a garment polls it), so a signal during start-up stops the node too.
+    ctrlc::set_handler(move || {
+        drape::cancel::request();
+        flag.store(true, Ordering::Relaxed)
+    })
+    .context("cannot install the Ctrl-C handler")?;
     let s = run_node(&p, stop).with_context(|| format!("node with {}", file.display()))?;
     log::info!(
         "drape node stopped: {} frames published, {} joint states received",
