@@ -420,7 +420,7 @@ impl Sweep {
     fn parse_scene(&self, doc: &Value, what: &str) -> Result<Scene, String> {
         let text = serde_yaml_ng::to_string(doc).map_err(|e| e.to_string())?;
         let origin = format!("{} ({what})", self.scene_path.display());
-        let mut scene = Scene::from_yaml(&text, &origin).map_err(|e| e.to_string())?;
+        let mut scene = Scene::from_yaml(&text, &origin).map_err(|e| causes(&e))?;
         scene.base_dir = self.scene_path.parent().map(Path::to_path_buf);
         Ok(scene)
     }
@@ -476,6 +476,22 @@ fn apply(
                 .set(doc, Value::Sequence(points))
         }
     }
+}
+
+/// An error and its causes on one line (`a: b: c`), each cause once: the scene's errors keep
+/// the detail (the unknown field, the bad value) in their sources.
+fn causes(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut cur = e.source();
+    while let Some(c) = cur {
+        let text = c.to_string();
+        if !out.ends_with(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+        cur = c.source();
+    }
+    out
 }
 
 #[cfg(test)]
