@@ -37,6 +37,10 @@ pub struct RecordOptions {
     /// Also write each frame's step wall time on `/diagnostics` (off by default: with it the
     /// same scene no longer gives the same bag bytes).
     pub wall_time_in_bag: bool,
+    /// Write straight into `out` instead of a hidden file beside it renamed at the end: for a
+    /// caller that already writes to a staging name of its own and renames it (a sweep job's
+    /// `.part`), so a killed job leaves exactly that one partial file for its rerun to remove.
+    pub in_place: bool,
 }
 
 impl Default for RecordOptions {
@@ -49,6 +53,7 @@ impl Default for RecordOptions {
             topic_prefix: "/drape".into(),
             color: [0.85, 0.35, 0.2, 1.0],
             wall_time_in_bag: false,
+            in_place: false,
         }
     }
 }
@@ -217,7 +222,7 @@ pub fn record_with_robot(
             value: opts.publish_rate,
         });
     }
-    let staging = staging_path(out)?;
+    let staging = staging_path(out)?.filter(|_| !opts.in_place);
     let target = staging.as_deref().unwrap_or(out);
     let mut bag = BagWriter::create(target).map_err(|e| match e {
         // Name the file the user asked for, not the staging file beside it.

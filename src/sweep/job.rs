@@ -243,6 +243,8 @@ fn record_job(
         publish_rate: scene.publish_rate,
         distro: opts.distro.unwrap_or(Distro::Jazzy),
         frame_id,
+        // The job stages its bag as `.part` itself (renamed when finished).
+        in_place: true,
         ..RecordOptions::default()
     };
     let summary = record_with_robot(&mut sim, driver.as_mut(), bag, &ropts, stop, |_| {})?;
