@@ -17,8 +17,8 @@ use drape::cloth::Kinematic;
 use drape::robot::JointInput;
 use drape::ros::msg::{DiagnosticArray, Header, JointState, PointCloud2, Time};
 use drape::ros::node::{
-    context, real_time_preview, run_node, thread, ClockMode, Command, LoopConfig, Network,
-    NodeParams, Output, SimLoop, WallClock,
+    context, run_node, thread, ClockMode, Command, LoopConfig, Network, NodeParams, Output,
+    QualityBounds, SimLoop, WallClock,
 };
 use drape::scene::Scene;
 use ros2_client::qos::History;
@@ -44,6 +44,8 @@ struct Row {
     age_ms: Vec<f64>,
     step_ms: String,
     rtf: String,
+    /// The quality the node ran at in its last diagnostics (level, substeps, CG tolerance, cap).
+    quality: String,
 }
 
 fn cloud_xyz(c: &PointCloud2, idx: &[usize]) -> Vec<[f32; 3]> {
@@ -82,11 +84,14 @@ fn diag(d: &DiagnosticArray, key: &str) -> String {
 /// Solver settings of a row.
 #[derive(Clone, Copy, PartialEq)]
 enum Solver {
-    /// The scene's (two substeps, default CG).
+    /// The scene's (two substeps, default CG), fixed (`adaptive_quality: false`).
     Scene,
-    /// The node's `real_time_preview` option (one substep, CG tolerance 1e-2, at most 50
-    /// iterations).
-    Preview,
+    /// The node's adaptive quality (the default): the scene's settings lowered, within the
+    /// default bounds (one substep, CG tolerance 1e-2, at most 50 iterations), as far as real
+    /// time needs.
+    Adaptive,
+    /// Adaptive, with the scene's self-collision on (issue 16's acceptance row).
+    AdaptiveSelf,
 }
 
 /// How the bench talks to the simulation: through DDS (the real node), or straight to the
@@ -205,7 +210,7 @@ fn dds_link(scene: &Scene, solver: Solver, dir: &std::path::Path) -> Link {
         scene: path,
         publish_rate: RATE,
         obstacles_rate: 0.0,
-        real_time_preview: solver == Solver::Preview,
+        adaptive_quality: solver != Solver::Scene,
         ..NodeParams::default()
     };
     let stop = Arc::new(AtomicBool::new(false));
@@ -257,14 +262,12 @@ fn dds_link(scene: &Scene, solver: Solver, dir: &std::path::Path) -> Link {
     }
 }
 
-fn direct_link(mut scene: Scene, solver: Solver) -> Link {
-    if solver == Solver::Preview {
-        real_time_preview(&mut scene);
-    }
+fn direct_link(scene: Scene, solver: Solver) -> Link {
     let wall = WallClock::new();
     let cfg = LoopConfig {
         publish_rate: RATE,
         obstacles_rate: 0.0,
+        quality: (solver != Solver::Scene).then(QualityBounds::default),
         ..LoopConfig::default()
     };
     let core = SimLoop::new(scene, cfg, wall.now()).unwrap();
@@ -289,7 +292,8 @@ fn unix_now() -> f64 {
 }
 
 fn measure(res: usize, solver: Solver, dds: bool) -> Row {
-    let scene = scene_for(res);
+    let mut scene = scene_for(res);
+    scene.collision.self_collision = solver == Solver::AdaptiveSelf;
     let attached: Vec<usize> = scene
         .build()
         .unwrap()
@@ -346,8 +350,23 @@ fn measure(res: usize, solver: Solver, dds: bool) -> Row {
         }
     }
     let last_diag = link.finish();
-    let (step_ms, rtf) = last_diag.map_or(("?".into(), "?".into()), |d| {
-        (diag(&d, "step_time_mean_ms"), diag(&d, "real_time_factor"))
+    let (step_ms, rtf, quality) = last_diag.map_or(("?".into(), "?".into(), "?".into()), |d| {
+        let quality = format!(
+            "{} ({} substeps, CG {}, cap {}){}",
+            diag(&d, "quality_level"),
+            diag(&d, "quality_substeps"),
+            diag(&d, "quality_cg_tolerance"),
+            diag(&d, "quality_cg_max_iterations"),
+            match diag(&d, "real_time_factor_at_lowest_quality").as_str() {
+                "n/a" | "?" => String::new(),
+                f => format!(", short of real time: factor {f} at the lowest"),
+            }
+        );
+        (
+            diag(&d, "step_time_mean_ms"),
+            diag(&d, "real_time_factor"),
+            quality,
+        )
     });
     Row {
         res,
@@ -357,6 +376,7 @@ fn measure(res: usize, solver: Solver, dds: bool) -> Row {
         age_ms,
         step_ms,
         rtf,
+        quality,
     }
 }
 
@@ -364,7 +384,8 @@ impl std::fmt::Display for Solver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Solver::Scene => "scene",
-            Solver::Preview => "preview",
+            Solver::Adaptive => "adaptive",
+            Solver::AdaptiveSelf => "adaptive, self-collision",
         })
     }
 }
@@ -382,18 +403,19 @@ fn main() {
         plan.extend([
             (24, Solver::Scene, true),
             (64, Solver::Scene, true),
-            (64, Solver::Preview, true),
+            (64, Solver::Adaptive, true),
+            (64, Solver::AdaptiveSelf, true),
         ]);
     }
-    plan.extend([(24, Solver::Scene, false), (64, Solver::Preview, false)]);
+    plan.extend([(24, Solver::Scene, false), (64, Solver::Adaptive, false)]);
     let rows: Vec<Row> = plan
         .into_iter()
         .map(|(res, solver, dds)| measure(res, solver, dds))
         .collect();
     let period = 1e3 / RATE;
     println!("\nnode latency: joint state -> first ~/points showing it ({RATE} Hz, {TRIALS} steps of the arm)");
-    println!("| cloth | solver | via | seen | median ms | p90 ms | max ms | median / max in publish periods | state age at arrival, median ms | step ms | real-time factor |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| cloth | solver | via | seen | median ms | p90 ms | max ms | median / max in publish periods | state age at arrival, median ms | step ms | real-time factor | quality level (settings) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         let sorted = |v: &[f64]| {
             let mut v = v.to_vec();
@@ -407,7 +429,7 @@ fn main() {
                 .unwrap_or(f64::NAN)
         };
         println!(
-            "| {0}x{0} | {1} | {2} | {3}/{TRIALS} | {4:.1} | {5:.1} | {6:.1} | {7:.2} / {8:.2} | {9:.1} | {10} | {11} |",
+            "| {0}x{0} | {1} | {2} | {3}/{TRIALS} | {4:.1} | {5:.1} | {6:.1} | {7:.2} / {8:.2} | {9:.1} | {10} | {11} | {12} |",
             r.res,
             r.solver,
             if r.dds { "DDS" } else { "direct" },
@@ -420,6 +442,7 @@ fn main() {
             at(&a, 0.5),
             r.step_ms,
             r.rtf,
+            r.quality,
         );
     }
 }

@@ -1,8 +1,8 @@
 //! Where a step of the live node's 64x64 robot_towel goes, without DDS: the robot update (FK
 //! and obstacle targets), the simulation step split into the collision stage and the rest
 //! (solver, guard, kinematic targets), and the output conversion (normals, mesh and points
-//! messages, their CDR encoding). Scene settings and the real-time preview settings (one
-//! substep, CG 1e-2, at most 50 iterations), and the one step in which the arm jumps as in the
+//! messages, their CDR encoding). Scene settings and the node's lowest adaptive quality (default
+//! bounds: one substep, CG 1e-2, at most 50 iterations), and the one step in which the arm jumps as in the
 //! node_latency bench. Prints a table of mean milliseconds per step.
 //!
 //! `cargo bench --bench robot_step` (`-- RES` for another resolution).
@@ -41,7 +41,7 @@ fn run(res: usize, preview: bool) -> Split {
         .expect("bundled scene loads");
     scene.cloths[0].grid.resolution = [res, res];
     if preview {
-        drape::ros::node::real_time_preview(&mut scene);
+        drape::ros::node::lowest_quality(&mut scene, &drape::ros::node::QualityBounds::default());
     }
     let (mut sim, driver) = scene.build_with_robot().expect("bundled scene builds");
     let mut driver = driver.expect("robot_towel has a robot");

@@ -81,6 +81,12 @@ pub trait Integrator: Send {
     /// Called once when the simulation is built (and again if the effects change).
     fn prepare(&mut self, _effects: &EffectSet, _n: usize) {}
 
+    /// Changes the linear solver's settings from the next step on (the node's adaptive
+    /// quality). Returns false, changing nothing, for a method without a linear solver.
+    fn set_solver_settings(&mut self, _settings: super::ImplicitSettings) -> bool {
+        false
+    }
+
     /// Advances `(x, v)` in place and fills `report`.
     fn step(
         &mut self,

@@ -11,7 +11,7 @@ use super::model::{Model, StepSettings, Work};
 use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, StageError};
 use crate::effects::EffectSet;
-use crate::integrate::Integrator;
+use crate::integrate::{ImplicitSettings, Integrator};
 use crate::{Pose, Vec3};
 
 pub struct Simulation {
@@ -132,6 +132,19 @@ impl Simulation {
             return false;
         }
         *slot = Some((o.pose, pose));
+        true
+    }
+
+    /// Changes the step's quality from the next step on (the node's adaptive quality):
+    /// `substeps` per frame and the implicit solver's CG tolerance and cap (an integrator
+    /// without a linear solver ignores `solver`). The guard still subdivides any substep that
+    /// needs it. Returns false, changing nothing, for 0 substeps or unusable solver settings.
+    pub fn set_quality(&mut self, substeps: u32, solver: ImplicitSettings) -> bool {
+        if substeps == 0 || !solver.is_usable() {
+            return false;
+        }
+        self.settings.substeps = substeps;
+        self.integrator.set_solver_settings(solver);
         true
     }
 

@@ -19,6 +19,17 @@ impl Default for ImplicitSettings {
     }
 }
 
+impl ImplicitSettings {
+    /// Settings a scene could name: a finite tolerance in (0, 1) and a cap of at least one
+    /// iteration (the scene's validation enforces the same for files).
+    pub fn is_usable(&self) -> bool {
+        self.cg_tolerance.is_finite()
+            && self.cg_tolerance > 0.0
+            && self.cg_tolerance < 1.0
+            && self.cg_max_iterations >= 1
+    }
+}
+
 /// Which `M^-1` the conjugate gradient uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preconditioner {

@@ -109,6 +109,11 @@ impl Integrator for Implicit {
         }
     }
 
+    fn set_solver_settings(&mut self, settings: ImplicitSettings) -> bool {
+        self.settings = settings;
+        true
+    }
+
     fn prepare(&mut self, effects: &EffectSet, n: usize) {
         let mut p = PatternBuilder::new();
         effects.declare(&mut p);

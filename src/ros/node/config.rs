@@ -1,9 +1,8 @@
-//! How the simulation loop runs: its publishing rates, frame and colour ([`LoopConfig`]), and
-//! the real-time preview that trades an implicit scene's accuracy for speed
-//! ([`real_time_preview`]).
+//! How the simulation loop runs: its publishing rates, frame and colour, and how low it may
+//! take the solver's quality to hold real time ([`LoopConfig`]).
 
+use super::quality::QualityBounds;
 use crate::ros::Distro;
-use crate::scene::Scene;
 
 /// How the loop publishes.
 #[derive(Debug, Clone)]
@@ -20,6 +19,10 @@ pub struct LoopConfig {
     pub max_backlog_steps: u32,
     pub paused: bool,
     pub color: [f32; 4],
+    /// Adaptive quality within these bounds (see [`super::quality`]); `None`: the scene's
+    /// quality, fixed (the default here, so a loop driven on a synthetic clock steps the same
+    /// on any machine; `drape node` turns it on unless `adaptive_quality: false`).
+    pub quality: Option<QualityBounds>,
 }
 
 impl Default for LoopConfig {
@@ -34,47 +37,7 @@ impl Default for LoopConfig {
             max_backlog_steps: 6,
             paused: false,
             color: [0.85, 0.35, 0.2, 1.0],
+            quality: None,
         }
-    }
-}
-
-/// The real-time preview solver settings: one substep, CG tolerance 1e-2, at most 50 CG
-/// iterations, for an implicit scene (other integrators keep their settings: fewer substeps
-/// would make them unstable). Trades accuracy (stiffer-looking, less converged cloth) for a
-/// step several times cheaper, so a large cloth can keep real time.
-pub fn real_time_preview(scene: &mut Scene) {
-    if scene.solver.integrator == crate::integrate::IntegratorKind::Implicit {
-        scene.solver.substeps = 1;
-        scene.solver.cg_tolerance = scene.solver.cg_tolerance.max(1e-2);
-        scene.solver.cg_max_iterations = scene.solver.cg_max_iterations.min(50);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn towel(res: usize) -> Scene {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot_towel.yaml");
-        let mut scene = Scene::load(path.as_ref()).expect("robot_towel scene");
-        scene.cloths[0].grid.resolution = [res, res];
-        scene
-    }
-
-    #[test]
-    fn real_time_preview_changes_only_implicit_solver_settings() {
-        let mut scene = towel(6);
-        real_time_preview(&mut scene);
-        let s = &scene.solver;
-        assert_eq!(
-            (s.substeps, s.cg_tolerance, s.cg_max_iterations),
-            (1, 1e-2, 50)
-        );
-        let mut explicit = towel(6);
-        explicit.solver.integrator = crate::integrate::IntegratorKind::SymplecticEuler;
-        explicit.solver.substeps = 40;
-        let before = explicit.solver.clone();
-        real_time_preview(&mut explicit);
-        assert_eq!(explicit.solver, before);
     }
 }

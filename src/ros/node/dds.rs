@@ -3,7 +3,7 @@
 //! here. Nothing in this file does physics.
 
 use super::clock::{ClockMode, WallClock};
-use super::config::{real_time_preview, LoopConfig};
+use super::config::LoopConfig;
 use super::endpoints::{context, endpoints, Endpoints};
 use super::messages::{Command, Level, Output};
 use super::network::Network;
@@ -196,10 +196,7 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         Some(d) => d,
         None => Distro::from_env()?,
     };
-    let mut scene = Scene::load(&params.scene)?;
-    if params.real_time_preview {
-        real_time_preview(&mut scene);
-    }
+    let scene = Scene::load(&params.scene)?;
     let net = Network::from_env()?;
     let wall = WallClock::new();
     let cfg = LoopConfig {
@@ -212,6 +209,7 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         max_backlog_steps: params.max_backlog_steps,
         paused: params.paused,
         color: params.color,
+        quality: params.adaptive_quality.then_some(params.quality),
     };
     let wind = scene
         .wind

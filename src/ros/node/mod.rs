@@ -5,7 +5,8 @@
 //! [`SimLoop`] ([`sim_loop`]), which steps at a fixed `dt` paced by the wall clock or `/clock`
 //! ([`pacer`], [`clock`]) and never touches DDS. [`messages`] holds what crosses between them
 //! and the counters; [`joints`] gates joint states; [`outputs`] builds the diagnostics and
-//! obstacle messages; [`params`] and [`network`] read the configuration. This file only
+//! obstacle messages; [`quality`] adapts the solver's quality to hold real time; [`params`]
+//! and [`network`] read the configuration. This file only
 //! declares, re-exports and defines [`NodeError`].
 
 pub mod clock;
@@ -18,11 +19,12 @@ pub mod network;
 pub mod outputs;
 pub mod pacer;
 pub mod params;
+pub mod quality;
 pub mod sim_loop;
 pub mod thread;
 
 pub use clock::{time_of, ClockMode, WallClock};
-pub use config::{real_time_preview, LoopConfig};
+pub use config::LoopConfig;
 pub use dds::{run_node, NodeSummary};
 pub use endpoints::{context, resolve_topic};
 pub use joints::{Dropped, JointGate};
@@ -31,6 +33,9 @@ pub use network::{Network, NetworkError};
 pub use pacer::{Pacer, Schedule};
 pub use params::{
     parse_ros_args, DescriptionSource, NodeParams, ParamsError, RosArgs, ServiceWire,
+};
+pub use quality::{
+    lowest_quality, Decision, Quality, QualityBounds, QualityController, QualityStatus,
 };
 pub use sim_loop::SimLoop;
 

@@ -2,6 +2,7 @@
 //! Pure functions of the simulation state.
 
 use super::messages::LoopStats;
+use super::quality::QualityStatus;
 use crate::robot::{Geometry, RobotDriver};
 use crate::ros::msg::{
     ColorRGBA, DiagnosticArray, DiagnosticStatus, Distro, Header, KeyValue, Marker, MarkerArray,
@@ -27,13 +28,16 @@ pub struct DiagnosticsInput<'a> {
     pub new_drops: u64,
     pub new_divergences: u64,
     pub sim_time: f64,
+    /// The quality the loop runs at (adaptive or fixed).
+    pub quality: QualityStatus,
 }
 
 /// Below this real-time factor the status is WARN.
 pub const SLOW_RTF: f64 = 0.9;
 
 /// One `DiagnosticStatus` named `<name>: simulation`: ERROR after a divergence in the window,
-/// WARN when slower than real time or when inputs were dropped, else OK.
+/// WARN when real time cannot be held even at the lowest allowed quality, when slower than real
+/// time or when inputs were dropped, else OK (saying so when quality is reduced).
 pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
     let (level, message) = if d.new_divergences > 0 {
         (
@@ -42,6 +46,16 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
         )
     } else if d.paused {
         (DiagnosticStatus::OK, "paused".to_string())
+    } else if let Some(load) = d.quality.short_of_real_time {
+        (
+            DiagnosticStatus::WARN,
+            format!(
+                "cannot hold real time even at the lowest allowed quality ({}): real-time \
+                 factor {:.2}",
+                d.quality.quality,
+                1.0 / load
+            ),
+        )
     } else if d.real_time_factor.is_some_and(|r| r < SLOW_RTF) {
         (
             DiagnosticStatus::WARN,
@@ -55,6 +69,16 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             DiagnosticStatus::WARN,
             format!("{} bad joint state(s) dropped", d.new_drops),
         )
+    } else if d.quality.level > 0 {
+        (
+            DiagnosticStatus::OK,
+            format!(
+                "running at reduced quality, level {} of {} ({})",
+                d.quality.level,
+                d.quality.levels - 1,
+                d.quality.quality
+            ),
+        )
     } else {
         (DiagnosticStatus::OK, "running".to_string())
     };
@@ -63,7 +87,7 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
         key: k.to_string(),
         value: v,
     };
-    let values = vec![
+    let mut values = vec![
         kv(
             "real_time_factor",
             d.real_time_factor
@@ -101,6 +125,11 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
         ),
         kv("resets", s.resets.to_string()),
     ];
+    values.extend(
+        quality_values(&d.quality)
+            .into_iter()
+            .map(|(k, v)| kv(k, v)),
+    );
     DiagnosticArray {
         header: Header::new(d.stamp, ""),
         status: vec![DiagnosticStatus {
@@ -111,6 +140,30 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             values,
         }],
     }
+}
+
+/// The quality keys of `/diagnostics`: what the step runs at now and, while real time cannot
+/// be held at the lowest allowed quality, the real-time factor it reaches there.
+fn quality_values(q: &QualityStatus) -> Vec<(&'static str, String)> {
+    vec![
+        ("quality_adaptive", q.adaptive.to_string()),
+        ("quality_level", q.level.to_string()),
+        ("quality_lowest_level", (q.levels - 1).to_string()),
+        ("quality_substeps", q.quality.substeps.to_string()),
+        (
+            "quality_cg_tolerance",
+            format!("{:e}", q.quality.cg_tolerance),
+        ),
+        (
+            "quality_cg_max_iterations",
+            q.quality.cg_max_iterations.to_string(),
+        ),
+        (
+            "real_time_factor_at_lowest_quality",
+            q.short_of_real_time
+                .map_or_else(|| "n/a".into(), |l| format!("{:.3}", 1.0 / l)),
+        ),
+    ]
 }
 
 /// One marker per collision shape of the robot, at the link poses the solver uses, in the
@@ -212,6 +265,11 @@ mod tests {
     #[test]
     fn diagnostics_levels() {
         let stats = LoopStats::default();
+        let full = crate::ros::node::Quality {
+            substeps: 2,
+            cg_tolerance: 1e-5,
+            cg_max_iterations: 200,
+        };
         let mut d = DiagnosticsInput {
             name: "drape",
             stamp: Time::default(),
@@ -227,8 +285,28 @@ mod tests {
             new_drops: 0,
             new_divergences: 0,
             sim_time: 1.0,
+            quality: crate::ros::node::QualityController::new(
+                full,
+                &crate::ros::node::QualityBounds::default(),
+                true,
+            )
+            .status(),
         };
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::OK);
+        // At the lowest quality and still slow: WARN with the factor reached there.
+        d.quality.level = 7;
+        d.quality.short_of_real_time = Some(1.6);
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s.message.contains("factor 0.62"), "{}", s.message);
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "real_time_factor_at_lowest_quality" && kv.value == "0.625"));
+        d.quality.short_of_real_time = None;
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::OK);
+        assert!(s.message.contains("reduced quality"), "{}", s.message);
         d.real_time_factor = Some(0.5);
         let s = &diagnostics(&d).status[0];
         assert_eq!(s.level, DiagnosticStatus::WARN);

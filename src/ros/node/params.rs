@@ -3,6 +3,7 @@
 //!
 //! Pure parsing, no DDS: every rule here has a unit test.
 
+use super::quality::QualityBounds;
 use crate::ros::Distro;
 use serde_yaml_ng::Value;
 use std::path::{Path, PathBuf};
@@ -81,9 +82,11 @@ pub struct NodeParams {
     pub paused: bool,
     /// Steps the simulation may be behind before the backlog is dropped.
     pub max_backlog_steps: u32,
-    /// Replace the scene's implicit solver settings by the real-time preview ones
-    /// ([`super::sim_loop::real_time_preview`]).
-    pub real_time_preview: bool,
+    /// Lower an implicit scene's quality to hold real time (see [`super::quality`]).
+    pub adaptive_quality: bool,
+    /// How low (`quality.min_substeps`, `quality.max_cg_tolerance`,
+    /// `quality.min_cg_max_iterations`, `quality.levels`).
+    pub quality: QualityBounds,
     pub service_wire: ServiceWire,
     pub topics: Topics,
     pub color: [f32; 4],
@@ -104,7 +107,8 @@ impl Default for NodeParams {
             use_sim_time: false,
             paused: false,
             max_backlog_steps: 6,
-            real_time_preview: false,
+            adaptive_quality: true,
+            quality: QualityBounds::default(),
             service_wire: ServiceWire::Enhanced,
             topics: Topics::default(),
             color: [0.85, 0.35, 0.2, 1.0],
@@ -309,7 +313,26 @@ impl NodeParams {
             }
             "use_sim_time" => self.use_sim_time = boolean(v)?,
             "paused" => self.paused = boolean(v)?,
-            "real_time_preview" => self.real_time_preview = boolean(v)?,
+            "adaptive_quality" => self.adaptive_quality = boolean(v)?,
+            "real_time_preview" => {
+                return Err(
+                    "replaced by `adaptive_quality` (on by default: the node lowers \
+                            quality only when it cannot hold real time) and `quality.*` bounds"
+                        .into(),
+                )
+            }
+            "quality.min_substeps" => self.quality.min_substeps = integer(v, 1, 100_000)?,
+            "quality.max_cg_tolerance" => {
+                let t = number(v)?;
+                if !(t > 0.0 && t < 1.0) {
+                    return Err(format!("must be in (0, 1), got {t}"));
+                }
+                self.quality.max_cg_tolerance = t;
+            }
+            "quality.min_cg_max_iterations" => {
+                self.quality.min_cg_max_iterations = integer(v, 1, 100_000)?
+            }
+            "quality.levels" => self.quality.levels = integer(v, 2, 64)?,
             "max_backlog_steps" => {
                 let n = number(v)?;
                 if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
@@ -424,6 +447,14 @@ fn number(v: &Value) -> Result<f64, String> {
         .ok_or_else(|| format!("expected a number, got {v:?}"))
 }
 
+fn integer(v: &Value, min: u32, max: u32) -> Result<u32, String> {
+    let n = number(v)?;
+    if !((f64::from(min)..=f64::from(max)).contains(&n) && n.fract() == 0.0) {
+        return Err(format!("must be an integer in {min}..={max}, got {n}"));
+    }
+    Ok(n as u32)
+}
+
 fn boolean(v: &Value) -> Result<bool, String> {
     v.as_bool()
         .ok_or_else(|| format!("expected true or false, got {v:?}"))
@@ -516,16 +547,37 @@ drape:
     }
 
     #[test]
-    fn real_time_preview_is_a_boolean_option() {
+    fn adaptive_quality_and_its_bounds() {
         let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
-        assert!(!p.real_time_preview);
-        p.apply_overrides(&[("real_time_preview".into(), "true".into())])
-            .unwrap();
-        assert!(p.real_time_preview);
-        let e = p
-            .apply_overrides(&[("real_time_preview".into(), "fast".into())])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("real_time_preview"), "{e}");
+        assert!(p.adaptive_quality);
+        assert_eq!(p.quality, QualityBounds::default());
+        let text = format!(
+            "{FILE}    adaptive_quality: false\n    quality: {{ min_substeps: 2, \
+             max_cg_tolerance: 0.001, min_cg_max_iterations: 80, levels: 4 }}\n"
+        );
+        let q = NodeParams::from_yaml(&text, "f", "drape").unwrap();
+        assert!(!q.adaptive_quality);
+        assert_eq!(
+            q.quality,
+            QualityBounds {
+                min_substeps: 2,
+                max_cg_tolerance: 1e-3,
+                min_cg_max_iterations: 80,
+                levels: 4
+            }
+        );
+        for (key, value) in [
+            ("quality.min_substeps", "0"),
+            ("quality.max_cg_tolerance", "1.5"),
+            ("quality.levels", "1"),
+            ("adaptive_quality", "fast"),
+            ("real_time_preview", "true"),
+        ] {
+            let e = p
+                .apply_overrides(&[(key.into(), value.into())])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(key), "{e}");
+        }
     }
 }

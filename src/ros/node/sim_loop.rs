@@ -10,6 +10,8 @@ use super::messages::{Command, DroppedInputs, Level, LoopStats, Output};
 use super::outputs::{diagnostics, obstacle_markers, DiagnosticsInput};
 use super::pacer::{Pacer, Schedule};
 use super::params::positive_rate;
+use super::quality::{Decision, Quality, QualityController, QualityStatus};
+use crate::integrate::IntegratorKind;
 use crate::robot::{JointInput, JointSource, RobotDriver};
 use crate::ros::msg::{ColorRGBA, DiagnosticArray};
 use crate::ros::{mesh_marker, point_cloud};
@@ -20,6 +22,9 @@ use std::time::Instant;
 /// Seconds over which the robot moves from its initial pose to the last commanded one after a
 /// reset, so attached cloth is carried, not torn.
 const RESET_BLEND_S: f64 = 0.5;
+
+/// A model of a step's wall time (s) at a quality ([`SimLoop::set_step_cost`]).
+type StepCost = Box<dyn FnMut(&Quality) -> f64 + Send>;
 
 /// Measurements since the last diagnostics message.
 #[derive(Debug, Clone, Default)]
@@ -52,6 +57,11 @@ pub struct SimLoop {
     window: Window,
     contacts: usize,
     energy: f64,
+    /// Adaptive quality (fixed at the scene's when `cfg.quality` is `None`).
+    quality: QualityController,
+    /// A model of a step's wall time replacing the measured one (tests, benches).
+    step_cost: Option<StepCost>,
+    last_step_wall: f64,
 }
 
 impl SimLoop {
@@ -74,6 +84,15 @@ impl SimLoop {
         }
         let (sim, driver) = scene.build_with_robot()?;
         let dt = sim.settings.dt;
+        let full = Quality {
+            substeps: scene.solver.substeps,
+            cg_tolerance: scene.solver.cg_tolerance,
+            cg_max_iterations: scene.solver.cg_max_iterations,
+        };
+        // Only the implicit integrator adapts: fewer substeps make explicit ones unstable.
+        let implicit = scene.solver.integrator == IntegratorKind::Implicit;
+        let bounds = cfg.quality.unwrap_or_default();
+        let quality = QualityController::new(full, &bounds, cfg.quality.is_some() && implicit);
         let mut s = SimLoop {
             pacer: Pacer::new(dt, cfg.max_backlog_steps, now),
             publish: Schedule::new(cfg.publish_rate, now),
@@ -93,6 +112,9 @@ impl SimLoop {
             },
             contacts: 0,
             energy: 0.0,
+            quality,
+            step_cost: None,
+            last_step_wall: 0.0,
         };
         s.install_robot(driver);
         Ok(s)
@@ -116,6 +138,27 @@ impl SimLoop {
 
     pub fn paused(&self) -> bool {
         self.paused
+    }
+
+    /// The quality the loop runs at, as `/diagnostics` reports it.
+    pub fn quality(&self) -> QualityStatus {
+        self.quality.status()
+    }
+
+    /// Every quality the controller may choose, the scene's first.
+    pub fn quality_ladder(&self) -> &[Quality] {
+        self.quality.ladder()
+    }
+
+    /// Replaces the measured wall time of each step by `cost(quality)` (s), so the adaptive
+    /// quality can be driven on a synthetic clock (tests, benches).
+    pub fn set_step_cost(&mut self, cost: impl FnMut(&Quality) -> f64 + Send + 'static) {
+        self.step_cost = Some(Box::new(cost));
+    }
+
+    /// Wall time (s) of the last step, measured or from [`SimLoop::set_step_cost`].
+    pub fn last_step_wall(&self) -> f64 {
+        self.last_step_wall
     }
 
     /// Steps forgiven by the backlog policy.
@@ -269,7 +312,11 @@ impl SimLoop {
                 m.kinetic_energy + m.potential_energy,
             )
         });
-        let wall = start.elapsed().as_secs_f64();
+        let mut wall = start.elapsed().as_secs_f64();
+        if let Some(cost) = &mut self.step_cost {
+            wall = cost(&self.quality.quality());
+        }
+        self.last_step_wall = wall;
         self.stats.steps += 1;
         self.window.steps += 1;
         self.window.step_time_sum += wall;
@@ -279,6 +326,9 @@ impl SimLoop {
                 self.contacts = contacts;
                 self.energy = energy;
                 self.window.deepest_penetration = self.window.deepest_penetration.max(depth);
+                let dt = self.sim.settings.dt;
+                let decision = self.quality.update(wall, dt);
+                self.adapt(decision, out);
             }
             Err(e) => {
                 self.stats.divergences += 1;
@@ -287,11 +337,60 @@ impl SimLoop {
                     Level::Error,
                     format!("simulation diverged, restoring the initial cloth: {e}"),
                 );
+                if let Some(q) = self.quality.on_divergence() {
+                    log(
+                        out,
+                        Level::Warn,
+                        format!("diverged at reduced quality: not going below {q} again"),
+                    );
+                }
                 if let Err(e) = self.rebuild(now) {
                     log(out, Level::Error, format!("cannot rebuild the scene: {e}"));
                 }
             }
         }
+    }
+
+    /// Applies the controller's decision to the simulation and says what changed.
+    fn adapt(&mut self, decision: Decision, out: &mut Vec<Output>) {
+        let s = self.quality.status();
+        match decision {
+            Decision::Keep => {}
+            Decision::Lowered { quality, load } | Decision::Raised { quality, load } => {
+                self.apply_quality();
+                let dir = if matches!(decision, Decision::Lowered { .. }) {
+                    "lowered"
+                } else {
+                    "raised"
+                };
+                log(
+                    out,
+                    Level::Info,
+                    format!(
+                        "quality {dir} to level {} of {} ({quality}): steps took {load:.2}x \
+                         real time",
+                        s.level,
+                        s.levels - 1
+                    ),
+                );
+            }
+            Decision::CannotHold { quality, load } => log(
+                out,
+                Level::Warn,
+                format!(
+                    "cannot hold real time even at the lowest allowed quality ({quality}): \
+                     steps take {load:.2}x real time (real-time factor {:.2})",
+                    1.0 / load
+                ),
+            ),
+        }
+    }
+
+    /// Sets the controller's quality on the simulation (after a change or a rebuild, which
+    /// starts from the scene's quality).
+    fn apply_quality(&mut self) {
+        let q = self.quality.quality();
+        self.sim.set_quality(q.substeps, q.solver());
     }
 
     fn frame(&self) -> Output {
@@ -342,6 +441,7 @@ impl SimLoop {
             new_drops: self.stats.dropped.total() - w.dropped_at_start,
             new_divergences: self.stats.divergences - w.divergences_at_start,
             sim_time: self.sim.time(),
+            quality: self.quality.status(),
         })
     }
 
@@ -391,6 +491,7 @@ impl SimLoop {
                     .map_or(String::new(), |d| d.robot().name.clone());
                 self.scene = scene;
                 self.sim = sim;
+                self.apply_quality();
                 self.joints.clear();
                 self.install_robot(driver);
                 self.pacer.hold(now, self.sim.time());
@@ -417,6 +518,7 @@ impl SimLoop {
     fn rebuild(&mut self, now: f64) -> Result<(), SceneError> {
         let (sim, driver) = self.scene.build_with_robot()?;
         self.sim = sim;
+        self.apply_quality();
         self.install_robot(driver);
         self.pacer.hold(now, self.sim.time());
         Ok(())

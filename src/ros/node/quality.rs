@@ -1,0 +1,515 @@
+//! Adaptive quality: the node lowers the solver's quality (substeps, CG tolerance and cap) when
+//! a frame step costs more wall time than the simulated time it covers, and raises it back when
+//! there is room, so the real-time factor stays at 1 ([`QualityController`]).
+//!
+//! The rule is pure: the measured wall time of each frame step in, the quality of the next
+//! step out; no clock, no simulation, so every property below has a unit test.
+//!
+//! **Ladder.** Level 0 is the scene's own settings; the last level is the bounds
+//! ([`QualityBounds`]: fewest substeps, loosest tolerance, smallest cap, never beyond the
+//! scene's own). Levels between interpolate each setting geometrically, so neighbours differ in
+//! cost by a roughly constant factor. Only the implicit integrator adapts: fewer substeps
+//! would make an explicit one unstable, so its ladder is its one level.
+//!
+//! **Load** is `wall / dt`, the share of real time a step takes, judged as the median of the
+//! last [`WINDOW`] frames at the current level: one slow frame (a multigrid rebuild, the OS)
+//! moves no decision, and every decision sees only frames of the level it judges.
+//! - Over [`LOWER_ABOVE`] (10 % is left for publishing and message handling): one level down.
+//! - Under [`RAISE_BELOW`], after the level's wait: one level up. Between the two thresholds
+//!   nothing changes (hysteresis: a level that costs 0.5-0.9 of real time stays).
+//! - A raise undone within [`PROBE`] frames (the level above could not hold real time)
+//!   doubles the wait before that level is tried again, up to [`MAX_WAIT`]: the controller
+//!   probes ever more rarely instead of oscillating.
+//! - At the lowest allowed level with a load over 1 the node cannot hold real time; the
+//!   controller says so once per episode, with the real-time factor it reaches.
+//! - The divergence guard still rules: a divergence at level `l > 0` bans `l` and everything
+//!   below it for the rest of the run (the node rebuilds the cloth and goes to `l - 1`).
+
+use crate::integrate::{ImplicitSettings, IntegratorKind};
+use crate::scene::Scene;
+
+/// Frames whose median load a decision judges (8 frames: 0.13 s at 60 Hz).
+pub const WINDOW: usize = 8;
+/// Median load above which quality goes down.
+pub const LOWER_ABOVE: f64 = 0.9;
+/// Median load under which quality goes up (adjacent levels differ by ~1.3-2x in cost, so a
+/// raise from under 0.5 mostly lands under [`LOWER_ABOVE`]).
+pub const RAISE_BELOW: f64 = 0.5;
+/// Frames at a level before the first try of the level above (0.5 s at 60 Hz).
+pub const MIN_WAIT: u32 = 30;
+/// Longest wait before a probe (~64 s at 60 Hz).
+pub const MAX_WAIT: u32 = 3840;
+/// A lowering this many frames after a raise means the raise failed (2 s at 60 Hz).
+pub const PROBE: u32 = 120;
+
+/// One setting of the step's cost against its accuracy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quality {
+    pub substeps: u32,
+    pub cg_tolerance: f64,
+    pub cg_max_iterations: u32,
+}
+
+impl Quality {
+    /// The implicit solver's part of this quality.
+    pub fn solver(&self) -> ImplicitSettings {
+        ImplicitSettings {
+            cg_tolerance: self.cg_tolerance,
+            cg_max_iterations: self.cg_max_iterations,
+        }
+    }
+}
+
+impl std::fmt::Display for Quality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} substep(s), CG tolerance {:.1e}, cap {}",
+            self.substeps, self.cg_tolerance, self.cg_max_iterations
+        )
+    }
+}
+
+/// How low the node may take quality (node parameters `quality.*`). The defaults are the old
+/// `real_time_preview` settings: one substep, CG tolerance 1e-2, at most 50 iterations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QualityBounds {
+    pub min_substeps: u32,
+    pub max_cg_tolerance: f64,
+    pub min_cg_max_iterations: u32,
+    /// Rungs from the scene's quality to the bounds, both included (at least 2).
+    pub levels: u32,
+}
+
+impl Default for QualityBounds {
+    fn default() -> Self {
+        Self {
+            min_substeps: 1,
+            max_cg_tolerance: 1e-2,
+            min_cg_max_iterations: 50,
+            levels: 8,
+        }
+    }
+}
+
+/// What the controller asks of the loop after a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Decision {
+    Keep,
+    /// Run from the next step on at this (lower) quality; `load` is what the old one cost.
+    Lowered {
+        quality: Quality,
+        load: f64,
+    },
+    Raised {
+        quality: Quality,
+        load: f64,
+    },
+    /// The lowest allowed quality costs `load` times real time (> 1); said once per episode.
+    CannotHold {
+        quality: Quality,
+        load: f64,
+    },
+}
+
+/// What `/diagnostics` reports about quality.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QualityStatus {
+    pub quality: Quality,
+    /// 0: the scene's own quality.
+    pub level: usize,
+    pub levels: usize,
+    pub adaptive: bool,
+    /// While real time cannot be held at the lowest allowed quality: its load (> 1).
+    pub short_of_real_time: Option<f64>,
+}
+
+/// The update rule (see the module doc).
+#[derive(Debug, Clone)]
+pub struct QualityController {
+    ladder: Vec<Quality>,
+    level: usize,
+    /// Highest level index allowed (divergences lower it).
+    lowest: usize,
+    /// Loads of the frames at the current level, oldest first (at most [`WINDOW`]).
+    window: Vec<f64>,
+    frames_at_level: u32,
+    /// `wait[l]`: frames at level `l + 1` before level `l` is tried.
+    wait: Vec<u32>,
+    /// The level last raised into and the frames since.
+    probe: Option<(usize, u32)>,
+    short: Option<f64>,
+}
+
+impl QualityController {
+    /// A controller starting at the scene's quality `full`; `adaptive` false (or an explicit
+    /// integrator) keeps it there.
+    pub fn new(full: Quality, bounds: &QualityBounds, adaptive: bool) -> Self {
+        let ladder = if adaptive {
+            ladder(full, bounds)
+        } else {
+            vec![full]
+        };
+        let n = ladder.len();
+        Self {
+            ladder,
+            level: 0,
+            lowest: n - 1,
+            window: Vec::with_capacity(WINDOW),
+            frames_at_level: 0,
+            wait: vec![MIN_WAIT; n],
+            probe: None,
+            short: None,
+        }
+    }
+
+    pub fn ladder(&self) -> &[Quality] {
+        &self.ladder
+    }
+
+    pub fn quality(&self) -> Quality {
+        self.ladder[self.level]
+    }
+
+    pub fn status(&self) -> QualityStatus {
+        QualityStatus {
+            quality: self.quality(),
+            level: self.level,
+            levels: self.ladder.len(),
+            adaptive: self.ladder.len() > 1,
+            short_of_real_time: self.short,
+        }
+    }
+
+    /// Takes one frame step's wall time `wall` for `dt` simulated seconds.
+    pub fn update(&mut self, wall: f64, dt: f64) -> Decision {
+        if !(wall.is_finite() && wall >= 0.0 && dt > 0.0) {
+            return Decision::Keep;
+        }
+        self.frames_at_level = self.frames_at_level.saturating_add(1);
+        if let Some((_, age)) = &mut self.probe {
+            *age = age.saturating_add(1);
+        }
+        if self.window.len() == WINDOW {
+            self.window.remove(0);
+        }
+        self.window.push(wall / dt);
+        if self.window.len() < WINDOW {
+            return Decision::Keep;
+        }
+        let load = median(&self.window);
+        if load > LOWER_ABOVE && self.level < self.lowest {
+            if let Some((l, age)) = self.probe.take() {
+                if l == self.level && age <= PROBE {
+                    self.wait[l] = (self.wait[l] * 2).min(MAX_WAIT);
+                }
+            }
+            self.go(self.level + 1);
+            return Decision::Lowered {
+                quality: self.quality(),
+                load,
+            };
+        }
+        if load > 1.0 && self.level == self.lowest && self.ladder.len() > 1 {
+            let first = self.short.is_none();
+            self.short = Some(load);
+            return if first {
+                Decision::CannotHold {
+                    quality: self.quality(),
+                    load,
+                }
+            } else {
+                Decision::Keep
+            };
+        }
+        if load < LOWER_ABOVE {
+            self.short = None;
+        }
+        if let Some((l, age)) = self.probe {
+            if age > PROBE {
+                // The raise held: the next failure there starts its backoff afresh.
+                self.wait[l] = MIN_WAIT;
+                self.probe = None;
+            }
+        }
+        if load < RAISE_BELOW && self.level > 0 && self.frames_at_level >= self.wait[self.level - 1]
+        {
+            self.go(self.level - 1);
+            self.probe = Some((self.level, 0));
+            return Decision::Raised {
+                quality: self.quality(),
+                load,
+            };
+        }
+        Decision::Keep
+    }
+
+    /// After a divergence: bans the current level and those below it, and goes one level up.
+    /// Returns the new quality, `None` at the scene's own quality (nothing to undo).
+    pub fn on_divergence(&mut self) -> Option<Quality> {
+        if self.level == 0 {
+            return None;
+        }
+        self.lowest = self.level - 1;
+        self.short = None;
+        self.probe = None;
+        self.go(self.lowest);
+        Some(self.quality())
+    }
+
+    fn go(&mut self, level: usize) {
+        self.level = level;
+        self.window.clear();
+        self.frames_at_level = 0;
+    }
+}
+
+/// Sets an implicit scene's solver to the lowest quality `bounds` allow, the last rung of the
+/// ladder (benches measure it; other integrators keep their settings).
+pub fn lowest_quality(scene: &mut Scene, bounds: &QualityBounds) {
+    if scene.solver.integrator == IntegratorKind::Implicit {
+        let s = &mut scene.solver;
+        let full = Quality {
+            substeps: s.substeps,
+            cg_tolerance: s.cg_tolerance,
+            cg_max_iterations: s.cg_max_iterations,
+        };
+        if let Some(low) = ladder(full, bounds).last() {
+            (s.substeps, s.cg_tolerance, s.cg_max_iterations) =
+                (low.substeps, low.cg_tolerance, low.cg_max_iterations);
+        }
+    }
+}
+
+/// `full`, the bounds, and geometric steps between, without repeats; never beyond the bounds
+/// nor above the scene's own quality.
+fn ladder(full: Quality, b: &QualityBounds) -> Vec<Quality> {
+    let low = Quality {
+        substeps: b.min_substeps.clamp(1, full.substeps.max(1)),
+        cg_tolerance: b.max_cg_tolerance.max(full.cg_tolerance),
+        cg_max_iterations: b
+            .min_cg_max_iterations
+            .clamp(1, full.cg_max_iterations.max(1)),
+    };
+    let n = b.levels.max(2);
+    // Equal ends give that value exactly (powf would round it), and nothing leaves [a, z].
+    let geo = |a: f64, z: f64, s: f64| {
+        if a == z {
+            a
+        } else {
+            (a.powf(1.0 - s) * z.powf(s)).clamp(a.min(z), a.max(z))
+        }
+    };
+    let mut out: Vec<Quality> = Vec::with_capacity(n as usize);
+    for k in 0..n {
+        let s = f64::from(k) / f64::from(n - 1);
+        let q = if k == 0 {
+            full
+        } else if k == n - 1 {
+            low
+        } else {
+            let int = |a: u32, z: u32| {
+                (geo(f64::from(a), f64::from(z), s).round() as u32).clamp(z.min(a), a.max(z))
+            };
+            Quality {
+                substeps: int(full.substeps, low.substeps),
+                cg_tolerance: geo(full.cg_tolerance, low.cg_tolerance, s),
+                cg_max_iterations: int(full.cg_max_iterations, low.cg_max_iterations),
+            }
+        };
+        if out.last() != Some(&q) {
+            out.push(q);
+        }
+    }
+    out
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    if s.len().is_multiple_of(2) {
+        0.5 * (s[m - 1] + s[m])
+    } else {
+        s[m]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DT: f64 = 1.0 / 60.0;
+
+    fn towel() -> Quality {
+        Quality {
+            substeps: 2,
+            cg_tolerance: 1e-5,
+            cg_max_iterations: 200,
+        }
+    }
+
+    fn controller() -> QualityController {
+        QualityController::new(towel(), &QualityBounds::default(), true)
+    }
+
+    /// Feeds `frames` frames whose load is `load(level)`; returns the decisions that changed
+    /// something.
+    fn drive(
+        c: &mut QualityController,
+        frames: usize,
+        mut load: impl FnMut(usize) -> f64,
+    ) -> Vec<Decision> {
+        let mut changes = Vec::new();
+        for _ in 0..frames {
+            let wall = load(c.status().level) * DT;
+            let d = c.update(wall, DT);
+            if d != Decision::Keep {
+                changes.push(d);
+            }
+        }
+        changes
+    }
+
+    #[test]
+    fn ladder_runs_from_the_scene_to_the_bounds_and_never_past_them() {
+        let c = controller();
+        let l = c.ladder();
+        assert_eq!(l[0], towel());
+        assert_eq!(
+            *l.last().unwrap(),
+            Quality {
+                substeps: 1,
+                cg_tolerance: 1e-2,
+                cg_max_iterations: 50
+            }
+        );
+        for w in l.windows(2) {
+            assert!(w[1].substeps <= w[0].substeps);
+            assert!(w[1].cg_tolerance >= w[0].cg_tolerance);
+            assert!(w[1].cg_max_iterations <= w[0].cg_max_iterations);
+            assert_ne!(w[0], w[1]);
+        }
+        // Bounds looser than the scene's own settings keep the scene's.
+        let tight = Quality {
+            substeps: 1,
+            cg_tolerance: 0.05,
+            cg_max_iterations: 20,
+        };
+        let c = QualityController::new(tight, &QualityBounds::default(), true);
+        assert_eq!(c.ladder(), &[tight]);
+        assert!(!c.status().adaptive);
+    }
+
+    #[test]
+    fn real_time_met_keeps_the_scene_quality() {
+        let mut c = controller();
+        assert!(drive(&mut c, 5000, |_| 0.7).is_empty());
+        assert_eq!(c.quality(), towel());
+    }
+
+    #[test]
+    fn one_slow_frame_moves_nothing() {
+        let mut c = controller();
+        let mut k = 0;
+        let changes = drive(&mut c, 2000, |_| {
+            k += 1;
+            if k % 50 == 0 {
+                20.0
+            } else {
+                0.6
+            }
+        });
+        assert!(changes.is_empty(), "{changes:?}");
+    }
+
+    #[test]
+    fn overload_lowers_until_real_time_is_held_then_settles() {
+        // Level l costs 3 / 1.4^l of real time: level 4 (0.78) is the first that holds, and
+        // it is above the raise threshold, so nothing moves once there.
+        let cost = |l: usize| 3.0 / 1.4f64.powi(l as i32);
+        let mut c = controller();
+        let changes = drive(&mut c, 60 * 60, cost);
+        assert_eq!(c.status().level, 4);
+        assert_eq!(changes.len(), 4, "{changes:?}");
+        assert!(drive(&mut c, 60 * 60, cost).is_empty());
+        assert_eq!(c.status().short_of_real_time, None);
+    }
+
+    #[test]
+    fn a_failing_probe_is_tried_ever_more_rarely() {
+        // Dropping to one substep (level 3) halves the cost and more: 1.2 above it, 0.45 from
+        // it on. Level 3 has room (under 0.5), so the controller probes level 2, which fails.
+        let cost = |l: usize| if l < 3 { 1.2 } else { 0.45 };
+        let mut c = controller();
+        let first = drive(&mut c, 60 * 60, cost);
+        let probes = |d: &[Decision]| {
+            d.iter()
+                .filter(|d| matches!(d, Decision::Raised { .. }))
+                .count()
+        };
+        // Waits 30, 60, 120, ... frames: 6 probes fit in the first minute, 1-2 in the next.
+        assert!((4..=7).contains(&probes(&first)), "{first:?}");
+        let mut slow = 0;
+        let second = drive(&mut c, 60 * 60, |l| {
+            slow += usize::from(l < 3);
+            cost(l)
+        });
+        assert!(probes(&second) <= 2, "{second:?}");
+        // Each failed probe costs one window of slow frames.
+        assert!(slow <= 2 * WINDOW, "{slow} slow frames");
+        assert_eq!(c.status().level, 3);
+    }
+
+    #[test]
+    fn room_to_spare_raises_back_to_full_quality() {
+        let mut c = controller();
+        drive(&mut c, 600, |_| 5.0);
+        assert_eq!(c.status().level, c.ladder().len() - 1);
+        let changes = drive(&mut c, 60 * 60, |_| 0.2);
+        assert!(changes.iter().all(|d| matches!(d, Decision::Raised { .. })));
+        assert_eq!(c.quality(), towel());
+    }
+
+    #[test]
+    fn cannot_hold_is_said_once_with_its_factor() {
+        let mut c = controller();
+        let changes = drive(&mut c, 3000, |_| 1.6);
+        let said: Vec<_> = changes
+            .iter()
+            .filter_map(|d| match d {
+                Decision::CannotHold { load, quality } => Some((*load, *quality)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(said.len(), 1, "{changes:?}");
+        assert!((said[0].0 - 1.6).abs() < 1e-12);
+        assert_eq!(said[0].1, *c.ladder().last().unwrap());
+        assert_eq!(c.status().short_of_real_time, Some(1.6));
+        // Recovering ends the episode; a new one is said again.
+        drive(&mut c, 100, |_| 0.8);
+        assert_eq!(c.status().short_of_real_time, None);
+        let again = drive(&mut c, 100, |_| 1.6);
+        assert_eq!(again.len(), 1);
+    }
+
+    #[test]
+    fn a_divergence_bans_its_level_and_those_below() {
+        let mut c = controller();
+        drive(&mut c, 3000, |_| 5.0);
+        let lowest = c.ladder().len() - 1;
+        assert_eq!(c.status().level, lowest);
+        assert_eq!(c.on_divergence(), Some(c.ladder()[lowest - 1]));
+        drive(&mut c, 3000, |_| 5.0);
+        assert_eq!(c.status().level, lowest - 1, "the banned level came back");
+        let mut full = controller();
+        assert_eq!(full.on_divergence(), None);
+    }
+
+    #[test]
+    fn fixed_quality_never_changes() {
+        let mut c = QualityController::new(towel(), &QualityBounds::default(), false);
+        assert!(drive(&mut c, 1000, |_| 10.0).is_empty());
+        assert_eq!(c.status().short_of_real_time, None);
+    }
+}
