@@ -313,13 +313,22 @@ pub fn is_an_input(path: &Path) -> Option<OpenedInput> {
 /// The error and every cause below it, one per line: `error: <top>` then `  caused by: ...`.
 /// A cause whose text is already the end of the message above it is not repeated.
 pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut out = format!("error: {e}");
-    let mut last = e.to_string();
+    format!("error: {}", joined(e, "\n  caused by: "))
+}
+
+/// [`error_chain`] on one line, `top: cause: cause` (a log line, a service reply, a record).
+pub fn error_line(e: &(dyn std::error::Error + 'static)) -> String {
+    joined(e, ": ")
+}
+
+fn joined(e: &(dyn std::error::Error + 'static), sep: &str) -> String {
+    let mut out = e.to_string();
+    let mut last = out.clone();
     let mut cur = e.source();
     while let Some(c) = cur {
         let text = c.to_string();
         if !last.ends_with(&text) {
-            out.push_str("\n  caused by: ");
+            out.push_str(sep);
             out.push_str(&text);
         }
         last = text;

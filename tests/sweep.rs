@@ -157,7 +157,13 @@ fn bad_sweep_files_name_the_key_before_any_job_runs() {
             err.contains(reason),
             "{body}: error lacks {reason:?}: {err}"
         );
-        assert_eq!(err.trim().lines().count(), 1, "one error line: {err}");
+        // One error: its line, then the causes the command line prints below it.
+        let lines: Vec<&str> = err.trim().lines().collect();
+        assert!(lines[0].starts_with("drape: error: "), "{err}");
+        assert!(
+            lines[1..].iter().all(|l| l.starts_with("  caused by: ")),
+            "one error and its causes: {err}"
+        );
         assert!(!dir.path().join("out").exists(), "{body}: something ran");
     }
     // An index past the end.

@@ -41,6 +41,6 @@ pub use report::CollisionReport;
 pub use settings::{CollisionSettings, DetectionMode, ResponseMode};
 pub use spec::{
     validate_obstacles, BuildError, CollisionSpec, MotionSpec, ObstacleSpec, PoseSpec, ShapeSpec,
-    SpecError,
+    SpecError, SpecProblem,
 };
 pub use stage::CollisionStage;

@@ -161,26 +161,45 @@ impl Default for CollisionSpec {
     }
 }
 
-/// A validation failure with the key path of the offending value.
+/// A validation failure: the key path of the offending value and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{path}: {message}")]
+#[error("{path}: {problem}")]
 pub struct SpecError {
     pub path: String,
-    pub message: String,
+    pub problem: SpecProblem,
 }
 
-fn err(path: String, message: &str) -> SpecError {
-    SpecError {
-        path,
-        message: message.to_string(),
-    }
+/// What is wrong with an obstacle or collision value (the key path is in [`SpecError`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SpecProblem {
+    #[error("must be > 0, got {value}")]
+    NotPositive { value: f64 },
+    #[error("must be finite, got {values:?}")]
+    NotFinite { values: Vec<f64> },
+    #[error("must not be empty")]
+    Empty,
+    #[error("must be non-zero")]
+    ZeroNormal,
+    #[error("must be >= 0, got {value}")]
+    Negative { value: f64 },
+    #[error("times must increase ({previous} then {value})")]
+    TimesNotIncreasing { previous: f64, value: f64 },
+    #[error("duplicate obstacle name '{name}'")]
+    DuplicateName { name: String },
+    #[error("must be >= 1 for continuous self-collision")]
+    NoSelfIterations,
+}
+
+fn err(path: String, problem: SpecProblem) -> SpecError {
+    SpecError { path, problem }
 }
 
 fn check_pos(path: String, v: f64) -> Result<(), SpecError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(err(path, "must be > 0"))
+        Err(err(path, SpecProblem::NotPositive { value: v }))
     }
 }
 
@@ -188,7 +207,7 @@ fn check_finite(path: String, v: &[f64]) -> Result<(), SpecError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
-        Err(err(path, "must be finite"))
+        Err(err(path, SpecProblem::NotFinite { values: v.to_vec() }))
     }
 }
 
@@ -201,7 +220,7 @@ impl CollisionSpec {
         {
             return Err(err(
                 format!("{prefix}.self_iterations"),
-                "must be >= 1 for continuous self-collision",
+                SpecProblem::NoSelfIterations,
             ));
         }
         Ok(())
@@ -223,7 +242,7 @@ impl ObstacleSpec {
     /// `prefix` is this obstacle's key path, e.g. "obstacles[2]".
     pub fn validate(&self, prefix: &str) -> Result<(), SpecError> {
         if self.name.trim().is_empty() {
-            return Err(err(format!("{prefix}.name"), "must not be empty"));
+            return Err(err(format!("{prefix}.name"), SpecProblem::Empty));
         }
         let s = format!("{prefix}.shape");
         match &self.shape {
@@ -246,7 +265,7 @@ impl ObstacleSpec {
             }
             ShapeSpec::Mesh { path, scale } => {
                 if path.trim().is_empty() {
-                    return Err(err(format!("{s}.path"), "must not be empty"));
+                    return Err(err(format!("{s}.path"), SpecProblem::Empty));
                 }
                 for (i, v) in scale.iter().enumerate() {
                     check_pos(format!("{s}.scale[{i}]"), *v)?;
@@ -255,7 +274,7 @@ impl ObstacleSpec {
             ShapeSpec::Plane { normal } => {
                 check_finite(format!("{s}.normal"), normal)?;
                 if Vec3::from(*normal).length() < 1e-12 {
-                    return Err(err(format!("{s}.normal"), "must be non-zero"));
+                    return Err(err(format!("{s}.normal"), SpecProblem::ZeroNormal));
                 }
             }
         }
@@ -263,7 +282,10 @@ impl ObstacleSpec {
         check_finite(format!("{prefix}.pose.rpy"), &self.pose.rpy)?;
         if let Some(mu) = self.friction {
             if !(mu.is_finite() && mu >= 0.0) {
-                return Err(err(format!("{prefix}.friction"), "must be >= 0"));
+                return Err(err(
+                    format!("{prefix}.friction"),
+                    SpecProblem::Negative { value: mu },
+                ));
             }
         }
         match &self.motion {
@@ -273,13 +295,19 @@ impl ObstacleSpec {
             }
             MotionSpec::Waypoints { points: w } => {
                 if w.is_empty() {
-                    return Err(err(format!("{prefix}.motion.points"), "must not be empty"));
+                    return Err(err(format!("{prefix}.motion.points"), SpecProblem::Empty));
                 }
                 for (i, wp) in w.iter().enumerate() {
                     let p = format!("{prefix}.motion.points[{i}]");
                     check_finite(format!("{p}.t"), &[wp.t])?;
                     if i > 0 && wp.t <= w[i - 1].t {
-                        return Err(err(format!("{p}.t"), "times must increase"));
+                        return Err(err(
+                            format!("{p}.t"),
+                            SpecProblem::TimesNotIncreasing {
+                                previous: w[i - 1].t,
+                                value: wp.t,
+                            },
+                        ));
                     }
                     check_finite(format!("{p}.pose.xyz"), &wp.pose.xyz)?;
                     check_finite(format!("{p}.pose.rpy"), &wp.pose.rpy)?;
@@ -332,7 +360,7 @@ impl ObstacleSpec {
 
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    #[error("obstacle '{name}': cannot load mesh '{path}': {source}")]
+    #[error("obstacle '{name}': cannot load mesh '{path}'")]
     Mesh {
         name: String,
         path: String,
@@ -351,7 +379,9 @@ pub fn validate_obstacles(specs: &[ObstacleSpec], prefix: &str) -> Result<(), Sp
         if specs[..i].iter().any(|o| o.name == s.name) {
             return Err(err(
                 format!("{p}.name"),
-                &format!("duplicate obstacle name '{}'", s.name),
+                SpecProblem::DuplicateName {
+                    name: s.name.clone(),
+                },
             ));
         }
     }

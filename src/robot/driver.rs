@@ -302,6 +302,15 @@ fn stream_at(s: &[(f64, JointPositions)], t: f64) -> Option<JointPositions> {
     Some(a.1.lerp(&b.1, u))
 }
 
+/// Why [`joint_stream`] dropped a message (logged, not returned: the stream goes on).
+#[derive(Debug, thiserror::Error)]
+enum StreamDrop {
+    #[error("time {t:.6} s goes backwards")]
+    Backwards { t: f64 },
+    #[error(transparent)]
+    Input(crate::robot::JointInputError),
+}
+
 /// Turns timestamped joint messages (ns, names/positions/velocities) into a validated stream:
 /// times relative to the first message, each good message applied by name on top of the last
 /// good state, bad ones (unknown joint, NaN, length mismatch, time going backwards) dropped with
@@ -320,9 +329,9 @@ pub fn joint_stream(
         let start = *t0.get_or_insert(ns);
         let t = (ns as f64 - start as f64) * 1e-9;
         let result = if out.last().is_some_and(|(tl, _)| t < *tl) {
-            Err(format!("time {t:.6} s goes backwards"))
+            Err(StreamDrop::Backwards { t })
         } else {
-            input.apply(kin, &mut q).map_err(|e| e.to_string())
+            input.apply(kin, &mut q).map_err(StreamDrop::Input)
         };
         match result {
             Ok(()) => out.push((t, q.clone())),

@@ -2,7 +2,7 @@
 //! pieces, pins and attachments, frames, grasps, obstacles, and the effects through the scene's
 //! [`EffectPlan`] (only the effects the scene lists are built); garments are dressed here.
 
-use super::{EffectKind, RobotSpec, Scene, SceneError, Selection};
+use super::{EffectKind, NameKind, RobotSpec, Scene, SceneError, Selection};
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
 use crate::effects::{EffectPlan, Lattice, Term, WindPlan};
@@ -72,10 +72,13 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
             }
         }
         for (k, a) in c.attach.iter().enumerate() {
-            let frame = frames.index(&a.frame).ok_or_else(|| SceneError::Invalid {
-                origin: scene.origin().to_string(),
-                key: format!("cloths[{ci}].attach[{k}].frame"),
-                reason: format!("no frame named '{}'", a.frame),
+            let frame = frames.index(&a.frame).ok_or_else(|| {
+                unknown(
+                    scene,
+                    format!("cloths[{ci}].attach[{k}].frame"),
+                    NameKind::Frame,
+                    &a.frame,
+                )
             })?;
             let pose = frames.pose(frame);
             for v in select(&piece, &a.selection()) {
@@ -130,11 +133,20 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
     Ok((sim, driver))
 }
 
-fn invalid(scene: &Scene, key: String, reason: String) -> SceneError {
-    SceneError::Invalid {
+fn unknown(scene: &Scene, key: String, kind: NameKind, name: &str) -> SceneError {
+    SceneError::UnknownName {
         origin: scene.origin().to_string(),
         key,
-        reason,
+        kind,
+        name: name.to_string(),
+    }
+}
+
+fn grasp_error(scene: &Scene, key: String, source: crate::robot::GraspError) -> SceneError {
+    SceneError::Grasp {
+        origin: scene.origin().to_string(),
+        key,
+        source,
     }
 }
 
@@ -197,11 +209,11 @@ fn trajectory_error(scene: &Scene, tr: &JointTrajectory, e: TrajectoryError) -> 
             _ => format!("{base}.points[{index}]"),
         },
     };
-    let reason = match e {
-        TrajectoryError::Input { source, .. } => source.to_string(),
-        other => other.to_string(),
-    };
-    invalid(scene, key, reason)
+    SceneError::Trajectory {
+        origin: scene.origin().to_string(),
+        key,
+        source: e,
+    }
 }
 
 /// Attaches the cloth's selected vertices to their links (one frame per link), keeping offsets.
@@ -220,10 +232,11 @@ fn attach_to_links(
             continue;
         }
         let link = driver.robot().link_index(&a.link).ok_or_else(|| {
-            invalid(
+            unknown(
                 scene,
                 format!("robot.attach[{k}].link"),
-                format!("the robot has no link named '{}'", a.link),
+                NameKind::RobotLink,
+                &a.link,
             )
         })?;
         let pose = driver.link_poses()[link];
@@ -234,11 +247,11 @@ fn attach_to_links(
         }
         let picked = select(piece, &sel);
         if picked.is_empty() {
-            return Err(invalid(
-                scene,
-                format!("robot.attach[{k}]"),
-                format!("selects no vertex of cloth '{cloth_name}'"),
-            ));
+            return Err(SceneError::EmptySelection {
+                origin: scene.origin().to_string(),
+                key: format!("robot.attach[{k}]"),
+                cloth: cloth_name.clone(),
+            });
         }
         for v in picked {
             cloth.attach(v, frame, &pose);
@@ -257,20 +270,18 @@ fn add_grasps(
 ) -> Result<(), SceneError> {
     for (k, g) in r.grasps.iter().enumerate() {
         let key = |field: &str| format!("robot.grasps[{k}].{field}");
-        let link = driver.robot().link_index(&g.link).ok_or_else(|| {
-            invalid(
-                scene,
-                key("link"),
-                format!("the robot has no link named '{}'", g.link),
-            )
-        })?;
+        let link = driver
+            .robot()
+            .link_index(&g.link)
+            .ok_or_else(|| unknown(scene, key("link"), NameKind::RobotLink, &g.link))?;
         let mut fingers = Vec::with_capacity(g.fingers.len());
         for (f, name) in g.fingers.iter().enumerate() {
             let j = driver.robot().joint_index(name).ok_or_else(|| {
-                invalid(
+                unknown(
                     scene,
                     key(&format!("fingers[{f}]")),
-                    format!("the robot has no joint named '{name}'"),
+                    NameKind::RobotJoint,
+                    name,
                 )
             })?;
             fingers.push(j);
@@ -281,22 +292,25 @@ fn add_grasps(
                 .iter()
                 .find(|p| &p.name == name)
                 .map(|p| p.vertices())
-                .ok_or_else(|| invalid(scene, key("cloth"), format!("no cloth named '{name}'")))?,
+                .ok_or_else(|| unknown(scene, key("cloth"), NameKind::Cloth, name))?,
             None => 0..cloth.len(),
         };
         let state = Hysteresis::new(g.close_below, g.open_above)
-            .map_err(|e| invalid(scene, key("close_below"), e.to_string()))?;
+            .map_err(|e| grasp_error(scene, key("close_below"), e))?;
         let pads = PadBox::new(
             Pose::from_xyz_rpy(g.pads.xyz, g.pads.rpy),
             Vec3::from(g.pads.half_extents),
         )
-        .map_err(|e| invalid(scene, key("pads"), e.to_string()))?;
+        .map_err(|e| grasp_error(scene, key("pads"), e))?;
         if !(g.pads.xyz.iter().chain(&g.pads.rpy).all(|v| v.is_finite())) {
-            return Err(invalid(scene, key("pads"), "pose must be finite".into()));
+            return Err(SceneError::NonFinitePose {
+                origin: scene.origin().to_string(),
+                key: key("pads"),
+            });
         }
         let frame = driver.link_frame(link, frames);
         let grasp = Grasp::new(link, frame, fingers, state, pads, candidates)
-            .map_err(|e| invalid(scene, key("fingers"), e.to_string()))?;
+            .map_err(|e| grasp_error(scene, key("fingers"), e))?;
         driver.add_grasp(grasp);
     }
     Ok(())
@@ -317,10 +331,10 @@ fn build_collision(
                 crate::mesh::load_mesh_within(&base.join(path), Vec3::ONE, &roots)
                     .map(|m| (m.vertices, m.indices))
             })
-            .map_err(|e| SceneError::Invalid {
+            .map_err(|source| SceneError::Obstacle {
                 origin: origin(),
                 key: format!("obstacles[{i}]"),
-                reason: e.to_string(),
+                source,
             })?;
         obstacles.push(o);
     }
@@ -329,13 +343,14 @@ fn build_collision(
         let names = d.robot().link_names().to_vec();
         let shapes = d.robot().collision_shapes().to_vec();
         for (link, link_shapes) in shapes.iter().enumerate() {
-            let built = link_obstacles(&names[link], link_shapes, &poses[link]).map_err(|e| {
-                invalid(
-                    scene,
-                    "robot.urdf".into(),
-                    format!("link `{}`: {e}", names[link]),
-                )
-            })?;
+            let built =
+                link_obstacles(&names[link], link_shapes, &poses[link]).map_err(|source| {
+                    SceneError::LinkObstacle {
+                        origin: origin(),
+                        link: names[link].clone(),
+                        source,
+                    }
+                })?;
             for (o, local) in built {
                 d.bind_obstacle(link, obstacles.len(), local);
                 obstacles.push(o);
@@ -350,10 +365,9 @@ fn build_collision(
         cloth.thickness.clone(),
         cloth.friction.clone(),
     )
-    .map_err(|e| SceneError::Invalid {
+    .map_err(|source| SceneError::Collision {
         origin: origin(),
-        key: "collision".into(),
-        reason: e.to_string(),
+        source,
     })
 }
 

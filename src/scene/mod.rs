@@ -11,9 +11,11 @@
 //! ```
 
 mod build;
+mod error;
 mod problem;
 mod validate;
 
+pub use error::{NameKind, SceneError};
 pub use problem::{Problem, MAX_VERTICES};
 
 pub use build::{build, build_with_robot};
@@ -369,71 +371,6 @@ fn publish_rate() -> f64 {
 }
 fn gravity() -> [f64; 3] {
     [0.0, 0.0, -9.81]
-}
-
-/// A scene that could not be read or makes no sense. Every message starts with the scene's
-/// file (or the origin given to [`Scene::from_yaml`]), then the key path; the cause, if any, is
-/// the error's `source()`, printed once by the command line.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SceneError {
-    /// The file could not be read (missing, not a regular file, too large, not UTF-8).
-    #[error(transparent)]
-    Input(#[from] crate::input::InputError),
-    /// Not YAML, or not a scene (unknown key, wrong type); the YAML error gives the place.
-    #[error("{origin}: not a valid scene")]
-    Parse {
-        origin: String,
-        #[source]
-        source: serde_yaml_ng::Error,
-    },
-    /// Flow collections nested deeper than the parser can take in linear time.
-    #[error("{origin}: line {line}: YAML nested deeper than {max} levels")]
-    TooDeep {
-        origin: String,
-        line: usize,
-        max: usize,
-    },
-    /// A value that makes the run meaningless or unbounded.
-    #[error("{origin}: {key}: {problem}")]
-    Value {
-        origin: String,
-        key: String,
-        problem: Box<Problem>,
-    },
-    /// A problem found while building (a name the URDF lacks, an obstacle that cannot be made).
-    #[error("{origin}: {key}: {reason}")]
-    Invalid {
-        origin: String,
-        key: String,
-        reason: String,
-    },
-    /// The scene's garments could not be dressed (key `garments`).
-    #[error("{origin}: garments")]
-    Garment {
-        origin: String,
-        #[source]
-        source: Box<crate::garment::GarmentError>,
-    },
-    /// The scene's robot could not be loaded.
-    #[error("{origin}: robot.urdf")]
-    Robot {
-        origin: String,
-        #[source]
-        source: Box<crate::robot::RobotError>,
-    },
-}
-
-impl SceneError {
-    /// The key path of the value at fault, if the error has one.
-    pub fn key(&self) -> Option<&str> {
-        match self {
-            SceneError::Value { key, .. } | SceneError::Invalid { key, .. } => Some(key),
-            SceneError::Robot { .. } => Some("robot.urdf"),
-            SceneError::Garment { .. } => Some("garments"),
-            _ => None,
-        }
-    }
 }
 
 impl Scene {

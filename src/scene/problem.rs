@@ -66,8 +66,8 @@ pub enum Problem {
     Length { found: usize, expected: usize },
     #[error(transparent)]
     Garment(crate::garment::GarmentError),
-    #[error("{message}")]
-    Collision { message: String },
+    #[error(transparent)]
+    Collision(crate::collide::SpecProblem),
 }
 
 pub(super) type Invalid = (String, Problem);

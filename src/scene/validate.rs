@@ -182,7 +182,7 @@ impl Scene {
         self.validate_robot()?;
         validate_obstacles(&self.obstacles)?;
         crate::collide::validate_obstacles(&self.obstacles, "obstacles")
-            .map_err(|e| (e.path, Problem::Collision { message: e.message }))?;
+            .map_err(|e| (e.path, Problem::Collision(e.problem)))?;
         self.validate_collision()?;
         if total > MAX_VERTICES {
             return Err((
@@ -461,7 +461,7 @@ impl Scene {
             MAX_ITERATIONS,
         )?;
         c.validate("collision")
-            .map_err(|e| (e.path, Problem::Collision { message: e.message }))
+            .map_err(|e| (e.path, Problem::Collision(e.problem)))
     }
 }
 

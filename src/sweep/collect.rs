@@ -35,8 +35,10 @@ pub fn write_plan(sweep: &Sweep, out: &Path) -> Result<PathBuf, SweepError> {
         jobs: sweep.jobs().collect(),
     };
     let path = out.join("plan.json");
-    let text = serde_json::to_string(&plan)
-        .map_err(|e| SweepError::Other(format!("cannot encode the plan: {e}")))?;
+    let text = serde_json::to_string(&plan).map_err(|source| SweepError::Encode {
+        what: "the plan".into(),
+        source,
+    })?;
     write_atomic(&path, &(text + "\n"))?;
     Ok(path)
 }
@@ -62,9 +64,9 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
         path: plan_path.clone(),
         source,
     })?;
-    let plan: PlanFile = serde_json::from_str(&text).map_err(|e| SweepError::Parse {
+    let plan: PlanFile = serde_json::from_str(&text).map_err(|source| SweepError::Json {
         origin: plan_path.display().to_string(),
-        message: e.to_string(),
+        source,
     })?;
     let mut entries = Vec::with_capacity(plan.jobs.len());
     for job in &plan.jobs {
@@ -73,8 +75,10 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
     let jsonl = out.join("manifest.jsonl");
     let mut lines = String::new();
     for e in &entries {
-        let line = serde_json::to_string(e)
-            .map_err(|e| SweepError::Other(format!("cannot encode a manifest line: {e}")))?;
+        let line = serde_json::to_string(e).map_err(|source| SweepError::Encode {
+            what: format!("the manifest line of job {}", e.index),
+            source,
+        })?;
         lines.push_str(&line);
         lines.push('\n');
     }

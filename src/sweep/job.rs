@@ -214,8 +214,10 @@ pub fn run_job(
             record.error = Some(format!("{e:#}"));
         }
     }
-    let text = serde_json::to_string_pretty(&record)
-        .map_err(|e| SweepError::Other(format!("job {index}: cannot encode its record: {e}")))?;
+    let text = serde_json::to_string_pretty(&record).map_err(|source| SweepError::Encode {
+        what: format!("the record of job {index}"),
+        source,
+    })?;
     write_atomic(&files.record, &(text + "\n"))?;
     Ok(JobOutcome::Ran(record))
 }

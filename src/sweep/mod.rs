@@ -23,7 +23,7 @@ pub use collect::{collect, write_plan, Manifest, PlanFile};
 pub use draw::{Draw, Target};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};
 pub use keypath::KeyPath;
-pub use plan::{Job, JobSpec, Sweep, SweepError, SweepFile};
+pub use plan::{Job, JobSceneError, JobSpec, Sweep, SweepError, SweepFile};
 pub use pool::{run_local, PoolOptions, PoolReport};
 
 /// What `drape sweep plan` prints: the job count and the first `show` jobs' values.

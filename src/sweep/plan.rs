@@ -31,7 +31,7 @@
 use super::draw::{check_draw, sample, Draw, Target};
 use super::keypath::{describe, KeyPath};
 use super::rng::SplitMix64;
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
 use serde_yaml_ng::{Mapping, Value};
 use std::path::{Path, PathBuf};
@@ -67,16 +67,39 @@ fn one() -> usize {
     1
 }
 
-/// A sweep that cannot be planned or run; names the file and the key or job.
+/// A sweep that cannot be planned or run; names the file and the key or job, and keeps the
+/// cause (the scene's error, the I/O or parse error) as its `source()`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SweepError {
-    #[error("cannot read {path}: {source}")]
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
+        #[source]
         source: std::io::Error,
     },
-    #[error("{origin}: {message}")]
-    Parse { origin: String, message: String },
+    /// The sweep file or the base scene is not YAML of the expected form.
+    #[error("{origin}: not a valid sweep file or scene")]
+    Yaml {
+        origin: String,
+        #[source]
+        source: serde_yaml_ng::Error,
+    },
+    /// `plan.json` (or a record) is not what `drape sweep` writes.
+    #[error("{origin}: not a sweep plan")]
+    Json {
+        origin: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The base scene named by `scene:` cannot be read.
+    #[error("{origin}: scene: cannot read {}", path.display())]
+    SceneFile {
+        origin: String,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
     #[error("{origin}: {key}: {reason}")]
     Key {
@@ -84,6 +107,16 @@ pub enum SweepError {
         key: String,
         reason: String,
     },
+    /// A value of a key that the scene rejects (the scene's error is the source).
+    #[error("{origin}: {key}: value {value}")]
+    KeyValue {
+        origin: String,
+        key: String,
+        value: String,
+        #[source]
+        source: JobSceneError,
+    },
+    /// A job's values cannot be set on the scene document.
     #[error("{origin}: job {index} ({params}): {reason}")]
     Job {
         origin: String,
@@ -91,10 +124,40 @@ pub enum SweepError {
         params: String,
         reason: String,
     },
+    /// A job's scene is not valid (the scene's error is the source).
+    #[error("{origin}: job {index} ({params})")]
+    JobScene {
+        origin: String,
+        index: usize,
+        params: String,
+        #[source]
+        source: JobSceneError,
+    },
     #[error("job index {index} is out of range: the sweep has {count} jobs (0 to {})", count.saturating_sub(1))]
     IndexOutOfRange { index: usize, count: usize },
-    #[error("{0}")]
-    Other(String),
+    #[error("{origin}: too many jobs (the grid overflows)")]
+    TooManyJobs { origin: String },
+    #[error("cannot encode {what}")]
+    Encode {
+        what: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    #[error("cannot start {}", exe.display())]
+    Spawn {
+        exe: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// Why a job's scene document is not a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum JobSceneError {
+    #[error("cannot write the job's scene as YAML")]
+    Encode(#[source] serde_yaml_ng::Error),
+    #[error(transparent)]
+    Scene(Box<SceneError>),
 }
 
 /// One job of a sweep: its index and the values it sets, in the sweep file's key order.
@@ -181,24 +244,25 @@ impl Sweep {
             key: key.to_string(),
             reason,
         };
-        let file: SweepFile = serde_yaml_ng::from_str(text).map_err(|e| SweepError::Parse {
+        let file: SweepFile = serde_yaml_ng::from_str(text).map_err(|source| SweepError::Yaml {
             origin: origin.clone(),
-            message: e.to_string(),
+            source,
         })?;
         if file.samples == 0 {
             return Err(key_err("samples", "must be at least 1".into()));
         }
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let scene_path = dir.join(&file.scene);
-        let scene_text = std::fs::read_to_string(&scene_path).map_err(|e| SweepError::Key {
-            origin: origin.clone(),
-            key: "scene".into(),
-            reason: format!("cannot read {}: {e}", scene_path.display()),
-        })?;
+        let scene_text =
+            std::fs::read_to_string(&scene_path).map_err(|source| SweepError::SceneFile {
+                origin: origin.clone(),
+                path: scene_path.clone(),
+                source,
+            })?;
         let mut base: Value =
-            serde_yaml_ng::from_str(&scene_text).map_err(|e| SweepError::Parse {
+            serde_yaml_ng::from_str(&scene_text).map_err(|source| SweepError::Yaml {
                 origin: scene_path.display().to_string(),
-                message: e.to_string(),
+                source,
             })?;
         let key_of = |k: &Value, section: &str| -> Result<String, SweepError> {
             k.as_str().map(str::to_string).ok_or_else(|| {
@@ -267,9 +331,11 @@ impl Sweep {
 
         let mut count = file.samples;
         for (_, _, values) in &axes {
-            count = count.checked_mul(values.len()).ok_or_else(|| {
-                SweepError::Other(format!("{origin}: too many jobs (the grid overflows)"))
-            })?;
+            count = count
+                .checked_mul(values.len())
+                .ok_or_else(|| SweepError::TooManyJobs {
+                    origin: origin.clone(),
+                })?;
         }
         let out_dir = match &file.out {
             Some(o) => dir.join(o),
@@ -325,14 +391,13 @@ impl Sweep {
                 .iter()
                 .map(|(k, old)| (k.clone(), if *k == key { v.clone() } else { old.clone() }))
                 .collect();
-            let err = |reason: String| SweepError::Key {
-                origin: origin.clone(),
-                key: name.clone(),
-                reason: format!("value {}: {reason}", inline(&v)),
-            };
             let (doc, _) = self.document(&params).map_err(|(k, r)| {
                 if k == key {
-                    err(r)
+                    SweepError::Key {
+                        origin: origin.clone(),
+                        key: name.clone(),
+                        reason: format!("value {}: {r}", inline(&v)),
+                    }
                 } else {
                     SweepError::Key {
                         origin: origin.clone(),
@@ -341,7 +406,13 @@ impl Sweep {
                     }
                 }
             })?;
-            self.parse_scene(&doc, &name).map_err(err)?;
+            self.parse_scene(&doc, &name)
+                .map_err(|source| SweepError::KeyValue {
+                    origin: origin.clone(),
+                    key: name.clone(),
+                    value: inline(&v),
+                    source,
+                })?;
         }
         Ok(())
     }
@@ -402,25 +473,31 @@ impl Sweep {
 
     /// Job `job`'s scene, parsed and validated.
     pub fn job_spec(&self, job: &Job) -> Result<JobSpec, SweepError> {
-        let fail = |reason: String| SweepError::Job {
-            origin: self.path.display().to_string(),
-            index: job.index,
-            params: job.describe(),
-            reason,
-        };
+        let origin = || self.path.display().to_string();
         let (doc, joints) = self
             .document(&job.params)
-            .map_err(|(k, r)| fail(format!("{k}: {r}")))?;
+            .map_err(|(k, r)| SweepError::Job {
+                origin: origin(),
+                index: job.index,
+                params: job.describe(),
+                reason: format!("{k}: {r}"),
+            })?;
         let scene = self
             .parse_scene(&doc, &format!("job {}", job.index))
-            .map_err(fail)?;
+            .map_err(|source| SweepError::JobScene {
+                origin: origin(),
+                index: job.index,
+                params: job.describe(),
+                source,
+            })?;
         Ok(JobSpec { scene, joints })
     }
 
-    fn parse_scene(&self, doc: &Value, what: &str) -> Result<Scene, String> {
-        let text = serde_yaml_ng::to_string(doc).map_err(|e| e.to_string())?;
+    fn parse_scene(&self, doc: &Value, what: &str) -> Result<Scene, JobSceneError> {
+        let text = serde_yaml_ng::to_string(doc).map_err(JobSceneError::Encode)?;
         let origin = format!("{} ({what})", self.scene_path.display());
-        let mut scene = Scene::from_yaml(&text, &origin).map_err(|e| causes(&e))?;
+        let mut scene =
+            Scene::from_yaml(&text, &origin).map_err(|e| JobSceneError::Scene(Box::new(e)))?;
         scene.base_dir = self.scene_path.parent().map(Path::to_path_buf);
         Ok(scene)
     }
@@ -476,22 +553,6 @@ fn apply(
                 .set(doc, Value::Sequence(points))
         }
     }
-}
-
-/// An error and its causes on one line (`a: b: c`), each cause once: the scene's errors keep
-/// the detail (the unknown field, the bad value) in their sources.
-fn causes(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut out = e.to_string();
-    let mut cur = e.source();
-    while let Some(c) = cur {
-        let text = c.to_string();
-        if !out.ends_with(&text) {
-            out.push_str(": ");
-            out.push_str(&text);
-        }
-        cur = c.source();
-    }
-    out
 }
 
 #[cfg(test)]
@@ -556,7 +617,8 @@ mod tests {
 
     #[test]
     fn bad_keys_are_named() {
-        let err = |body: &str| sweep(body).unwrap_err().to_string();
+        // The whole chain, as the command line shows it: the scene's causes are sources.
+        let err = |body: &str| crate::input::error_line(&sweep(body).unwrap_err());
         let e = err("grid:\n  cloths[0].material.stiffnes: [1]\n");
         assert!(
             e.contains("grid.cloths[0].material.stiffnes") && e.contains("unknown field"),

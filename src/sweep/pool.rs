@@ -108,8 +108,9 @@ pub fn run_local(
                 .stdout(file)
                 .stderr(err)
                 .spawn()
-                .map_err(|e| {
-                    SweepError::Other(format!("cannot start {}: {e}", opts.exe.display()))
+                .map_err(|source| SweepError::Spawn {
+                    exe: opts.exe.clone(),
+                    source,
                 })?;
             running.push((i, child));
         }

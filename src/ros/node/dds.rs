@@ -413,7 +413,7 @@ fn serve(
                     };
                     let (success, message) = match result {
                         Ok(m) => (true, m),
-                        Err(m) => (false, m),
+                        Err(e) => (false, crate::input::error_line(&*e)),
                     };
                     ep.reset
                         .send_response(req, TriggerResponse { success, message })

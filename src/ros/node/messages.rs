@@ -5,6 +5,8 @@
 
 use crate::robot::JointInput;
 use crate::ros::msg::{DiagnosticArray, Marker, MarkerArray, PointCloud2};
+use crate::scene::SceneError;
+use std::sync::Arc;
 
 /// Something for the simulation thread to do.
 #[derive(Debug, Clone)]
@@ -50,9 +52,10 @@ pub enum Output {
         level: Level,
         text: String,
     },
+    /// The reset's outcome; the DDS side turns an error's chain into the reply's message.
     ResetDone {
         id: u64,
-        result: Result<String, String>,
+        result: Result<String, Arc<SceneError>>,
     },
 }
 

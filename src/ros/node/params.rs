@@ -127,8 +127,18 @@ pub enum ParamsError {
     /// Not a regular file, too large, not UTF-8 (see `crate::input`).
     #[error(transparent)]
     Input(#[from] crate::input::InputError),
-    #[error("{origin}: not YAML: {message}")]
-    Yaml { origin: String, message: String },
+    #[error("{origin}: not YAML")]
+    Yaml {
+        origin: String,
+        #[source]
+        source: serde_yaml_ng::Error,
+    },
+    #[error("{origin}: line {line}: nested deeper than {max} levels")]
+    TooDeep {
+        origin: String,
+        line: usize,
+        max: usize,
+    },
     #[error("{origin}: no `ros__parameters` for node `{node}` (expected `{node}:`, `/{node}:` or `/**:` at the top)")]
     NoSection { origin: String, node: String },
     #[error("{origin}: parameter `{key}`: {reason}")]
@@ -213,17 +223,15 @@ impl NodeParams {
     /// Parses the `ros__parameters` of `node_name` from parameters-file text.
     pub fn from_yaml(text: &str, origin: &str, node_name: &str) -> Result<NodeParams, ParamsError> {
         if let Err(line) = crate::input::check_yaml_depth(text) {
-            return Err(ParamsError::Yaml {
+            return Err(ParamsError::TooDeep {
                 origin: origin.into(),
-                message: format!(
-                    "line {line}: nested deeper than {} levels",
-                    crate::input::MAX_YAML_DEPTH
-                ),
+                line,
+                max: crate::input::MAX_YAML_DEPTH,
             });
         }
-        let doc: Value = serde_yaml_ng::from_str(text).map_err(|e| ParamsError::Yaml {
+        let doc: Value = serde_yaml_ng::from_str(text).map_err(|source| ParamsError::Yaml {
             origin: origin.into(),
-            message: e.to_string(),
+            source,
         })?;
         let section = [
             node_name.to_string(),

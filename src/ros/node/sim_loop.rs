@@ -11,12 +11,14 @@ use super::outputs::{diagnostics, obstacle_markers, DiagnosticsInput};
 use super::pacer::{Pacer, Schedule};
 use super::params::positive_rate;
 use super::quality::{Decision, Quality, QualityController, QualityStatus};
+use crate::input::error_line;
 use crate::integrate::IntegratorKind;
 use crate::robot::{JointInput, JointSource, RobotDriver};
 use crate::ros::msg::{ColorRGBA, DiagnosticArray};
 use crate::ros::{mesh_marker, point_cloud};
 use crate::scene::{Scene, SceneError};
 use crate::sim::Simulation;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Seconds over which the robot moves from its initial pose to the last commanded one after a
@@ -208,9 +210,13 @@ impl SimLoop {
                     self.stats.resets += 1;
                     "cloth restored to its initial state".to_string()
                 });
-                let result = result.map_err(|e| e.to_string());
+                let result = result.map_err(Arc::new);
                 if let Err(e) = &result {
-                    log(out, Level::Error, format!("reset failed: {e}"));
+                    log(
+                        out,
+                        Level::Error,
+                        format!("reset failed: {}", error_line(&**e)),
+                    );
                 }
                 out.push(Output::ResetDone { id, result });
             }
@@ -335,7 +341,10 @@ impl SimLoop {
                 log(
                     out,
                     Level::Error,
-                    format!("simulation diverged, restoring the initial cloth: {e}"),
+                    format!(
+                        "simulation diverged, restoring the initial cloth: {}",
+                        error_line(&*e)
+                    ),
                 );
                 if let Some(q) = self.quality.on_divergence() {
                     log(
@@ -345,6 +354,7 @@ impl SimLoop {
                     );
                 }
                 if let Err(e) = self.rebuild(now) {
+                    let e = error_line(&e);
                     log(out, Level::Error, format!("cannot rebuild the scene: {e}"));
                 }
             }
@@ -507,7 +517,10 @@ impl SimLoop {
                 log(
                     out,
                     Level::Error,
-                    format!("robot_description rejected, keeping the current robot: {e}"),
+                    format!(
+                        "robot_description rejected, keeping the current robot: {}",
+                        error_line(&e)
+                    ),
                 );
             }
         }
