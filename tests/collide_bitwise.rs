@@ -10,10 +10,12 @@
 //! in the feedback between solver and stage. To re-record after a deliberate physics change,
 //! run with `--nocapture` and copy the printed table.
 
+#[path = "common/bitwise.rs"]
+mod bitwise;
+
+use bitwise::{assert_recorded, bundled_scene, fnv, fnv_state, FNV_OFFSET};
 use drape::collide::{DetectionMode, ResponseMode};
 use drape::integrate::IntegratorKind;
-use drape::scene::Scene;
-use std::path::Path;
 
 struct Case {
     name: &'static str,
@@ -77,24 +79,10 @@ const EXPECTED: &[(&str, u64)] = &[
     ("sphere16_projection", 0xfadc50a365b3a77e),
 ];
 
-/// FNV-1a over the bit patterns of the values.
-fn fnv(h: &mut u64, values: impl IntoIterator<Item = f64>) {
-    for v in values {
-        for b in v.to_bits().to_le_bytes() {
-            *h ^= b as u64;
-            *h = h.wrapping_mul(0x100_0000_01b3);
-        }
-    }
-}
-
 /// Runs a case; returns the hash of the per-step metrics and the final state, and the total
 /// contact count seen.
 fn run(c: &Case) -> (u64, usize) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join(c.file);
-    let mut s = Scene::load(&path).expect("bundled scene");
-    s.cloths[0].grid.resolution = [c.res, c.res];
+    let mut s = bundled_scene(c.file, c.res);
     if c.file == "sphere_drape.yaml" {
         // Start resting on the ball's thickness layer, so contacts begin at once.
         s.cloths[0].grid.pose.xyz[2] = 0.605;
@@ -113,7 +101,7 @@ fn run(c: &Case) -> (u64, usize) {
         s.collision.response = response;
     }
     let (mut sim, mut driver) = s.build_with_robot().expect("valid scene");
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut h = FNV_OFFSET;
     let mut contacts = 0;
     for _ in 0..c.steps {
         if let Some(d) = driver.as_mut() {
@@ -137,25 +125,17 @@ fn run(c: &Case) -> (u64, usize) {
             ],
         );
     }
-    let x = sim.cloth.x.iter().flat_map(|p| p.to_array());
-    let v = sim.cloth.v.iter().flat_map(|p| p.to_array());
-    fnv(&mut h, x.chain(v));
+    fnv_state(&mut h, &sim.cloth);
     (h, contacts)
 }
 
 #[test]
 fn collision_trajectories_are_bitwise_those_before_the_reorganisation() {
-    let mut table = String::new();
-    let mut mismatches = Vec::new();
+    let mut found = Vec::new();
     for c in CASES {
         let (h, contacts) = run(c);
-        table += &format!("    (\"{}\", 0x{h:016x}),\n", c.name);
         assert!(contacts > 0, "{}: the case made no contact", c.name);
-        match EXPECTED.iter().find(|(name, _)| *name == c.name) {
-            Some(&(_, want)) if want == h => {}
-            _ => mismatches.push(c.name),
-        }
+        found.push((c.name, h));
     }
-    println!("const EXPECTED: &[(&str, u64)] = &[\n{table}];");
-    assert!(mismatches.is_empty(), "changed: {mismatches:?}\n{table}");
+    assert_recorded(&found, EXPECTED);
 }

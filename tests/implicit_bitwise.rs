@@ -8,9 +8,12 @@
 //! feedback to the collision stage. To re-record after a deliberate physics change, run with
 //! `--nocapture` and copy the printed table.
 
+#[path = "common/bitwise.rs"]
+mod bitwise;
+
+use bitwise::{assert_recorded, bundled_scene, fnv, fnv_state, FNV_OFFSET};
 use drape::integrate::IntegratorKind;
-use drape::scene::{EffectKind, Scene};
-use std::path::Path;
+use drape::scene::EffectKind;
 
 struct Case {
     name: &'static str,
@@ -63,24 +66,10 @@ const EXPECTED: &[(&str, u64)] = &[
     ("table24_implicit_edges", 0x632d9e4006676c17),
 ];
 
-/// FNV-1a over the bit patterns of the values.
-fn fnv(h: &mut u64, values: impl IntoIterator<Item = f64>) {
-    for v in values {
-        for b in v.to_bits().to_le_bytes() {
-            *h ^= b as u64;
-            *h = h.wrapping_mul(0x100_0000_01b3);
-        }
-    }
-}
-
 /// Runs a case; returns the hash of the per-step metrics (energies, speed, solver counts) and
 /// the final positions and velocities, and the total contact count seen.
 fn run(c: &Case) -> (u64, usize) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join(c.file);
-    let mut s = Scene::load(&path).expect("bundled scene");
-    s.cloths[0].grid.resolution = [c.res, c.res];
+    let mut s = bundled_scene(c.file, c.res);
     if let Some(effects) = c.effects {
         s.effects = effects.to_vec();
     }
@@ -89,7 +78,7 @@ fn run(c: &Case) -> (u64, usize) {
     }
     s.solver.integrator = IntegratorKind::Implicit;
     let mut sim = s.build().expect("valid scene");
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut h = FNV_OFFSET;
     let mut contacts = 0;
     for _ in 0..c.steps {
         let m = sim.step().expect("stable");
@@ -107,30 +96,19 @@ fn run(c: &Case) -> (u64, usize) {
             ],
         );
     }
-    let x = sim.cloth.x.iter().flat_map(|p| p.to_array());
-    let v = sim.cloth.v.iter().flat_map(|p| p.to_array());
-    fnv(&mut h, x.chain(v));
+    fnv_state(&mut h, &sim.cloth);
     (h, contacts)
 }
 
 #[test]
 fn implicit_trajectories_are_bitwise_those_before_the_split() {
-    let mut table = String::new();
-    let mut mismatches = Vec::new();
-    for (k, c) in CASES.iter().enumerate() {
+    let mut found = Vec::new();
+    for c in CASES {
         let (h, contacts) = run(c);
-        table += &format!("    (\"{}\", 0x{h:016x}),\n", c.name);
         if c.name.contains("contact") || c.name.contains("edges") {
             assert!(contacts > 0, "{}: the contact case made no contact", c.name);
         }
-        match EXPECTED.get(k) {
-            Some(&(name, want)) if name == c.name && want == h => {}
-            _ => mismatches.push(c.name),
-        }
+        found.push((c.name, h));
     }
-    println!("const EXPECTED: &[(&str, u64)] = &[\n{table}];");
-    assert!(
-        mismatches.is_empty(),
-        "trajectories differ from the recorded ones: {mismatches:?}"
-    );
+    assert_recorded(&found, EXPECTED);
 }

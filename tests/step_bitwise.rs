@@ -7,9 +7,12 @@
 //! scenes are chaotic, that would flip unrelated round-off-sensitive tests. To re-record after a
 //! deliberate physics change, run with `--nocapture` and copy the printed table.
 
+#[path = "common/bitwise.rs"]
+mod bitwise;
+
+use bitwise::{assert_recorded, bundled_scene, fnv, fnv_state, FNV_OFFSET};
 use drape::integrate::IntegratorKind;
-use drape::scene::{EffectKind, Scene};
-use std::path::Path;
+use drape::scene::EffectKind;
 
 const BASE: &[EffectKind] = &[
     EffectKind::Gravity,
@@ -125,24 +128,10 @@ const EXPECTED: &[(&str, u64)] = &[
     ("sphere32_symplectic_contact", 0x83591e2ae291daf1),
 ];
 
-/// FNV-1a over the bit patterns of the values.
-fn fnv(h: &mut u64, values: impl IntoIterator<Item = f64>) {
-    for v in values {
-        for b in v.to_bits().to_le_bytes() {
-            *h ^= b as u64;
-            *h = h.wrapping_mul(0x100_0000_01b3);
-        }
-    }
-}
-
 /// Runs a case; returns the hash of the final positions and velocities, the per-step kinetic
 /// energies and subdivision counts, and the total contact count seen.
 fn run(c: &Case) -> (u64, usize, u32) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join(c.file);
-    let mut s = Scene::load(&path).expect("bundled scene");
-    s.cloths[0].grid.resolution = [c.res, c.res];
+    let mut s = bundled_scene(c.file, c.res);
     if c.file == "sphere_drape.yaml" {
         // Start resting on the ball's thickness layer, so contacts begin at once.
         s.cloths[0].grid.pose.xyz[2] = 0.605;
@@ -156,7 +145,7 @@ fn run(c: &Case) -> (u64, usize, u32) {
         s.wind = Some(serde_yaml_ng::from_str("velocity: [3.0, 1.0, 0.5]").expect("wind"));
     }
     let mut sim = s.build().expect("valid scene");
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut h = FNV_OFFSET;
     let (mut contacts, mut subdivisions) = (0, 0);
     for _ in 0..c.steps {
         let m = sim.step().expect("stable");
@@ -164,33 +153,22 @@ fn run(c: &Case) -> (u64, usize, u32) {
         subdivisions += m.subdivisions;
         fnv(&mut h, [m.kinetic_energy, m.potential_energy, m.max_speed]);
     }
-    let x = sim.cloth.x.iter().flat_map(|p| p.to_array());
-    let v = sim.cloth.v.iter().flat_map(|p| p.to_array());
-    fnv(&mut h, x.chain(v));
+    fnv_state(&mut h, &sim.cloth);
     (h, contacts, subdivisions)
 }
 
 #[test]
 fn explicit_trajectories_are_bitwise_those_before_the_speed_work() {
-    let mut table = String::new();
-    let mut mismatches = Vec::new();
-    for (k, c) in CASES.iter().enumerate() {
+    let mut found = Vec::new();
+    for c in CASES {
         let (h, contacts, subdivisions) = run(c);
-        table += &format!("    (\"{}\", 0x{h:016x}),\n", c.name);
         if c.name.starts_with("sphere") {
             assert!(contacts > 0, "{}: the contact case made no contact", c.name);
         }
         if c.name.ends_with("subdivided") {
             assert!(subdivisions > 0, "{}: the guard never subdivided", c.name);
         }
-        match EXPECTED.get(k) {
-            Some(&(name, want)) if name == c.name && want == h => {}
-            _ => mismatches.push(c.name),
-        }
+        found.push((c.name, h));
     }
-    println!("const EXPECTED: &[(&str, u64)] = &[\n{table}];");
-    assert!(
-        mismatches.is_empty(),
-        "trajectories differ from the recorded ones: {mismatches:?}"
-    );
+    assert_recorded(&found, EXPECTED);
 }
