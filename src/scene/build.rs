@@ -146,7 +146,7 @@ fn grasp_error(scene: &Scene, key: String, source: crate::robot::GraspError) -> 
     SceneError::Grasp {
         origin: scene.origin().to_string(),
         key,
-        source,
+        source: Box::new(source),
     }
 }
 
@@ -212,7 +212,7 @@ fn trajectory_error(scene: &Scene, tr: &JointTrajectory, e: TrajectoryError) -> 
     SceneError::Trajectory {
         origin: scene.origin().to_string(),
         key,
-        source: e,
+        source: Box::new(e),
     }
 }
 
@@ -334,7 +334,7 @@ fn build_collision(
             .map_err(|source| SceneError::Obstacle {
                 origin: origin(),
                 key: format!("obstacles[{i}]"),
-                source,
+                source: Box::new(source),
             })?;
         obstacles.push(o);
     }
@@ -348,7 +348,7 @@ fn build_collision(
                     SceneError::LinkObstacle {
                         origin: origin(),
                         link: names[link].clone(),
-                        source,
+                        source: Box::new(source),
                     }
                 })?;
             for (o, local) in built {
@@ -367,7 +367,7 @@ fn build_collision(
     )
     .map_err(|source| SceneError::Collision {
         origin: origin(),
-        source,
+        source: Box::new(source),
     })
 }
 

@@ -6,6 +6,8 @@ use super::problem::Problem;
 use crate::collide::{BuildError, ObstacleError, StageError};
 use crate::robot::{GraspError, TrajectoryError};
 
+// Sources are boxed: the error stays small on the `Ok` path of every build.
+
 /// What kind of thing a scene named that does not exist ([`SceneError::UnknownName`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NameKind {
@@ -77,7 +79,7 @@ pub enum SceneError {
         origin: String,
         key: String,
         #[source]
-        source: TrajectoryError,
+        source: Box<TrajectoryError>,
     },
     /// A grasp rule that cannot be made (thresholds, pads, fingers).
     #[error("{origin}: {key}")]
@@ -85,7 +87,7 @@ pub enum SceneError {
         origin: String,
         key: String,
         #[source]
-        source: GraspError,
+        source: Box<GraspError>,
     },
     /// A pose with a non-finite component.
     #[error("{origin}: {key}: pose must be finite")]
@@ -96,7 +98,7 @@ pub enum SceneError {
         origin: String,
         key: String,
         #[source]
-        source: BuildError,
+        source: Box<BuildError>,
     },
     /// A robot link's collision shape that cannot be made into an obstacle.
     #[error("{origin}: robot.urdf: link `{link}`")]
@@ -104,14 +106,14 @@ pub enum SceneError {
         origin: String,
         link: String,
         #[source]
-        source: ObstacleError,
+        source: Box<ObstacleError>,
     },
     /// The collision stage cannot be built for this cloth and these obstacles.
     #[error("{origin}: collision")]
     Collision {
         origin: String,
         #[source]
-        source: StageError,
+        source: Box<StageError>,
     },
     /// The scene's garments could not be dressed (key `garments`).
     #[error("{origin}: garments")]
