@@ -1,12 +1,14 @@
 //! `drape render`: pictures of recorded bags without ROS or Foxglove, for dataset thumbnails and
 //! the README.
 //!
-//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker) and, for robot scenes,
+//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker), `/drape/obstacles` (the scene's
+//! own obstacles, one Marker each, when it has any; see [`obstacles`]) and, for robot scenes,
 //! `/robot_description` and `/tf`: the robot's collision shapes are drawn at the link poses of
-//! the frame. Each picked frame of each bag is one tile, shaded by the software rasteriser in
+//! the frame. Planes are drawn as a square under what the tile frames. Each picked frame of each bag is one tile, shaded by the software rasteriser in
 //! [`raster`]; tiles are laid out in a grid (bags side by side by default, or the frames of one
 //! bag as a strip). A `.gif` output animates the frames instead.
 
+pub mod obstacles;
 pub mod raster;
 mod shapes;
 
@@ -66,16 +68,40 @@ impl Default for RenderOptions {
     }
 }
 
+/// Why a picture could not be made; the cause, if any, is the `source()`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RenderError {
     #[error(transparent)]
     Bag(#[from] BagError),
-    #[error("{path}: no cloth frames on /drape/mesh")]
+    #[error("{}: no cloth frames on /drape/mesh", path.display())]
     Empty { path: PathBuf },
-    #[error("cannot write {path}: {reason}")]
-    Write { path: PathBuf, reason: String },
-    #[error("{0}")]
-    Options(String),
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: WriteError,
+    },
+    #[error("tile size {width}x{height} is out of range (at most 16 million pixels)")]
+    TileSize { width: usize, height: usize },
+    #[error("no bag to render")]
+    NoBags,
+}
+
+/// Why a PNG or GIF could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteError {
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Png(#[from] png::EncodingError),
+    #[error(transparent)]
+    Gif(#[from] gif::EncodingError),
+    #[error("no frames to animate")]
+    NoFrames,
+    #[error("{width}x{height} pixels is too large for a GIF (at most 65535 a side)")]
+    TooLargeForGif { width: usize, height: usize },
 }
 
 /// The part of a `visualization_msgs/msg/Marker` the renderer needs: everything up to `points`
@@ -99,11 +125,13 @@ impl RosMessage for MarkerHead {
     const TYPE_NAME: &'static str = "visualization_msgs/msg/Marker";
 }
 
-/// One frame of a bag: the cloth as a welded mesh and the robot's shapes.
+/// One frame of a bag: the cloth as a welded mesh, the robot's shapes and the scene's solid
+/// obstacles (`meshes`, which the camera frames), and the scene's planes as (point, normal).
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub time_ns: u64,
     pub meshes: Vec<Mesh>,
+    pub planes: Vec<(Vec3, Vec3)>,
 }
 
 /// The frames of a bag to draw.
@@ -147,6 +175,10 @@ pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderEr
     } else {
         None
     };
+    // A bag without scene obstacles has no such topic.
+    let scene_obstacles = read_topic::<MarkerHead>(bag, "/drape/obstacles")
+        .map(|t| t.messages)
+        .unwrap_or_default();
     let mut frames = Vec::new();
     for i in chosen {
         let (t, m) = &mesh.messages[i];
@@ -155,9 +187,12 @@ pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderEr
             let poses = tf_at(tf, *t);
             meshes.extend(shapes.meshes(&poses));
         }
+        let o = obstacles::at(&scene_obstacles, *t);
+        meshes.extend(o.meshes);
         frames.push(Frame {
             time_ns: *t,
             meshes,
+            planes: o.planes,
         });
     }
     Ok(frames)
@@ -200,6 +235,7 @@ fn robot_of(bag: &Path, package_paths: &[PathBuf]) -> Option<(shapes::RobotShape
     let shapes = match shapes::RobotShapes::from_urdf(urdf, package_paths) {
         Ok(s) => s,
         Err(e) => {
+            let e = crate::input::error_line(&e);
             log::warn!("{}: the robot is not drawn: {e}", bag.display());
             return None;
         }
@@ -234,8 +270,9 @@ fn tf_at(tf: &TfSeries, t: u64) -> HashMap<String, Pose> {
     out
 }
 
-/// Bounding sphere of the meshes of some frames.
-fn bounds(frames: &[Frame]) -> (Vec3, f64) {
+/// Bounding sphere of the meshes of some frames (planes left out: unbounded): what each
+/// tile's camera frames.
+pub fn bounds(frames: &[Frame]) -> (Vec3, f64) {
     let mut lo = Vec3::splat(f64::INFINITY);
     let mut hi = Vec3::splat(f64::NEG_INFINITY);
     for f in frames {
@@ -266,6 +303,9 @@ pub fn draw_frame(frame: &Frame, bounds: (Vec3, f64), o: &RenderOptions) -> Imag
         o.height,
     );
     let mut r = Raster::new(o.width, o.height, &cam);
+    for &(point, normal) in &frame.planes {
+        r.draw(&cam, &obstacles::plane_square(point, normal, bounds));
+    }
     for m in &frame.meshes {
         r.draw(&cam, m);
     }
@@ -275,10 +315,10 @@ pub fn draw_frame(frame: &Frame, bounds: (Vec3, f64), o: &RenderOptions) -> Imag
 /// The tiles of every bag (bag-major), each bag framed on its own over its picked frames.
 pub fn tiles(bags: &[PathBuf], o: &RenderOptions) -> Result<Vec<Vec<Image>>, RenderError> {
     if o.width == 0 || o.height == 0 || o.width * o.height > 16_000_000 {
-        return Err(RenderError::Options(format!(
-            "tile size {}x{} is out of range",
-            o.width, o.height
-        )));
+        return Err(RenderError::TileSize {
+            width: o.width,
+            height: o.height,
+        });
     }
     let mut out = Vec::new();
     for bag in bags {
@@ -309,14 +349,14 @@ pub fn sheet(tiles: &[Vec<Image>], o: &RenderOptions) -> Image {
 /// frames (all frames unless picked otherwise) with the bags side by side.
 pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), RenderError> {
     if bags.is_empty() {
-        return Err(RenderError::Options("no bag to render".into()));
+        return Err(RenderError::NoBags);
     }
     let gif = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    let write_err = |reason: String| RenderError::Write {
+    let write_err = |source: WriteError| RenderError::Write {
         path: out.to_path_buf(),
-        reason,
+        source,
     };
     if gif {
         let mut opts = o.clone();
@@ -357,8 +397,8 @@ pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), Ren
 }
 
 /// Writes an RGB PNG.
-pub fn write_png(path: &Path, img: &Image) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+pub fn write_png(path: &Path, img: &Image) -> Result<(), WriteError> {
+    let file = std::fs::File::create(path)?;
     let mut enc = png::Encoder::new(
         std::io::BufWriter::new(file),
         img.width as u32,
@@ -366,27 +406,27 @@ pub fn write_png(path: &Path, img: &Image) -> Result<(), String> {
     );
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc.write_header().map_err(|e| e.to_string())?;
-    w.write_image_data(&img.rgb).map_err(|e| e.to_string())?;
-    w.finish().map_err(|e| e.to_string())
+    let mut w = enc.write_header()?;
+    w.write_image_data(&img.rgb)?;
+    Ok(w.finish()?)
 }
 
 /// Writes a looping GIF, `delay_cs` hundredths of a second per frame.
-pub fn write_gif(path: &Path, frames: &[Image], delay_cs: u16) -> Result<(), String> {
-    let first = frames.first().ok_or("no frames")?;
-    let (w, h) = (
-        u16::try_from(first.width).map_err(|_| "too wide for a GIF")?,
-        u16::try_from(first.height).map_err(|_| "too tall for a GIF")?,
-    );
-    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
-    let mut enc =
-        gif::Encoder::new(std::io::BufWriter::new(file), w, h, &[]).map_err(|e| e.to_string())?;
-    enc.set_repeat(gif::Repeat::Infinite)
-        .map_err(|e| e.to_string())?;
+pub fn write_gif(path: &Path, frames: &[Image], delay_cs: u16) -> Result<(), WriteError> {
+    let first = frames.first().ok_or(WriteError::NoFrames)?;
+    let (Ok(w), Ok(h)) = (u16::try_from(first.width), u16::try_from(first.height)) else {
+        return Err(WriteError::TooLargeForGif {
+            width: first.width,
+            height: first.height,
+        });
+    };
+    let file = std::fs::File::create(path)?;
+    let mut enc = gif::Encoder::new(std::io::BufWriter::new(file), w, h, &[])?;
+    enc.set_repeat(gif::Repeat::Infinite)?;
     for f in frames {
         let mut frame = gif::Frame::from_rgb_speed(w, h, &f.rgb, 10);
         frame.delay = delay_cs;
-        enc.write_frame(&frame).map_err(|e| e.to_string())?;
+        enc.write_frame(&frame)?;
     }
     Ok(())
 }

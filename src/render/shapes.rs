@@ -1,7 +1,7 @@
 //! The robot's collision shapes as triangle meshes, posed per frame from `/tf`.
 
 use super::raster::Mesh;
-use crate::robot::{Geometry, Robot, UrdfOptions};
+use crate::robot::{Geometry, Robot, RobotError, UrdfOptions};
 use crate::{Pose, Vec3};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -19,14 +19,14 @@ const ROBOT_COLOR: [f64; 3] = [0.45, 0.55, 0.68];
 impl RobotShapes {
     /// From URDF text (`/robot_description`); `package://` and relative meshes are searched in
     /// `search_paths`.
-    pub fn from_urdf(urdf: &str, search_paths: &[PathBuf]) -> Result<RobotShapes, String> {
+    pub fn from_urdf(urdf: &str, search_paths: &[PathBuf]) -> Result<RobotShapes, RobotError> {
         let opts = UrdfOptions {
             search_paths: search_paths.to_vec(),
             ..UrdfOptions::default()
         };
         // The first search path also stands for the URDF's own folder (relative mesh paths).
         let base = search_paths.first().map(PathBuf::as_path);
-        let robot = Robot::from_urdf_str(urdf, base, &opts).map_err(|e| e.to_string())?;
+        let robot = Robot::from_urdf_str(urdf, base, &opts)?;
         let names = robot.link_names().to_vec();
         let mut links = Vec::new();
         for (l, shapes) in robot.collision_shapes().iter().enumerate() {
@@ -65,7 +65,7 @@ impl RobotShapes {
 
 /// A shape as triangles: boxes with flat faces (split vertices), round shapes with 24 segments.
 /// Cylinders and capsules run along local z, as in URDF.
-fn tessellate(g: &Geometry) -> Mesh {
+pub(super) fn tessellate(g: &Geometry) -> Mesh {
     let mut m = Mesh::default();
     match g {
         Geometry::Box { half_extents: h } => {

@@ -9,6 +9,7 @@ mod distro;
 pub mod drive;
 pub mod msg;
 pub mod node;
+pub mod obstacles;
 pub mod qos;
 pub mod record;
 pub mod telemetry;

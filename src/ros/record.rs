@@ -12,6 +12,7 @@ use crate::ros::msg::{
     ColorRGBA, DiagnosticArray, Header, JointState, Marker, PointCloud2, RosString, TFMessage,
     Time, Transform, TransformStamped,
 };
+use crate::ros::obstacles;
 use crate::ros::telemetry::{FrameQuality, RunQuality, RunSummary};
 use crate::ros::{
     mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro, Durability,
@@ -187,6 +188,9 @@ struct Topics {
     diagnostics: TopicId,
     /// `/joint_states` and `/tf` when a robot is recorded.
     robot: Option<(TopicId, TopicId)>,
+    /// `<prefix>/obstacles` when the scene has obstacles of its own (one Marker per message),
+    /// and whether any of them moves (then every frame writes them again).
+    obstacles: Option<(TopicId, bool)>,
 }
 
 /// Runs `sim` and records it to `out`. `stop` is polled every step; `progress` gets the simulated
@@ -273,7 +277,25 @@ fn record_into(
         )?,
         diagnostics: bag.add_topic::<DiagnosticArray>("/diagnostics", opts.distro, None)?,
         robot: None,
+        obstacles: None,
     };
+    let own: Vec<_> = sim
+        .collision()
+        .map(|c| c.obstacles())
+        .unwrap_or_default()
+        .iter()
+        .filter(|o| obstacles::is_scene_obstacle(o))
+        .collect();
+    if !own.is_empty() {
+        let moving = own.iter().any(|o| obstacles::moves(o));
+        let topic = bag.add_topic::<Marker>(
+            &format!("{}/obstacles", opts.topic_prefix),
+            opts.distro,
+            None,
+        )?;
+        topics.obstacles = Some((topic, moving));
+        write_obstacles(sim, bag, topic, opts)?;
+    }
     if let Some(d) = driver.as_deref() {
         let latched = offered_qos_profiles(Reliability::Reliable, Durability::TransientLocal);
         let desc = bag.add_topic::<RosString>("/robot_description", opts.distro, Some(&latched))?;
@@ -421,6 +443,26 @@ fn write_frame(
     if let (Some(d), Some((joints, tf))) = (driver, topics.robot) {
         bag.write(joints, ns, &joint_state(d, stamp))?;
         bag.write(tf, ns, &tf_message(d, stamp))?;
+    }
+    if let Some((topic, true)) = topics.obstacles {
+        write_obstacles(sim, bag, topic, opts)?;
+    }
+    Ok(())
+}
+
+/// The scene's own obstacles at their current poses, one Marker message each.
+fn write_obstacles(
+    sim: &Simulation,
+    bag: &mut BagWriter,
+    topic: TopicId,
+    opts: &RecordOptions,
+) -> Result<(), BagError> {
+    let ns = (sim.time() * 1e9).round().max(0.0) as u64;
+    let all = sim.collision().map(|c| c.obstacles()).unwrap_or_default();
+    let markers =
+        obstacles::scene_obstacle_markers(all, opts.distro, Time::from_nanos(ns), &opts.frame_id);
+    for m in &markers {
+        bag.write(topic, ns, m)?;
     }
     Ok(())
 }
