@@ -6,8 +6,9 @@
 //! partial bag or a failed record is there. An `ok` record whose bag is gone or has another size
 //! is `failed` too.
 
+use super::error::SweepError;
 use super::job::{params_json, write_atomic, JobFiles, JobRecord, Status};
-use super::plan::{Job, Sweep, SweepError};
+use super::plan::{Job, Sweep};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

@@ -11,7 +11,8 @@
 //! anything else is redone. A job stopped by SIGTERM or SIGINT (Slurm's `scancel`, Kubernetes'
 //! pod deletion, Ctrl-C) removes its partial bag and writes a record with status `failed`.
 
-use super::plan::{inline, Job, Sweep, SweepError};
+use super::error::SweepError;
+use super::plan::{inline, Job, Sweep};
 use crate::ros::record::{record_with_robot, RecordOptions};
 use crate::ros::telemetry::RunSummary;
 use crate::ros::Distro;

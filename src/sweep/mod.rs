@@ -13,6 +13,7 @@
 pub mod collect;
 pub mod draw;
 pub mod emit;
+mod error;
 pub mod job;
 pub mod keypath;
 pub mod plan;
@@ -21,9 +22,10 @@ mod rng;
 
 pub use collect::{collect, write_plan, Manifest, PlanFile};
 pub use draw::{Draw, Target};
+pub use error::{JobSceneError, SweepError};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};
 pub use keypath::KeyPath;
-pub use plan::{Job, JobSceneError, JobSpec, Sweep, SweepError, SweepFile};
+pub use plan::{Job, JobSpec, Sweep, SweepFile};
 pub use pool::{run_local, PoolOptions, PoolReport};
 
 /// What `drape sweep plan` prints: the job count and the first `show` jobs' values.

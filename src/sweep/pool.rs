@@ -6,8 +6,9 @@
 //! get `RAYON_NUM_THREADS` = cores / N (at least 1) unless it is set: results do not depend on
 //! it, only the run time does.
 
+use super::error::SweepError;
 use super::job::JobFiles;
-use super::plan::{Sweep, SweepError};
+use super::plan::Sweep;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
