@@ -8,16 +8,18 @@
 //! [`raster`]; tiles are laid out in a grid (bags side by side by default, or the frames of one
 //! bag as a strip). A `.gif` output animates the frames instead.
 
+mod marker;
 pub mod obstacles;
 pub mod raster;
 mod shapes;
 
+use marker::MarkerHead;
+
 pub use raster::{Camera, Image, Mesh, Raster};
 
-use crate::ros::msg::{Header, Point, RosString, TFMessage};
-use crate::ros::{read_topic, BagError, RosMessage};
+use crate::ros::msg::{RosString, TFMessage};
+use crate::ros::{read_topic, BagError};
 use crate::{Pose, Vec3};
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -102,27 +104,6 @@ pub enum WriteError {
     NoFrames,
     #[error("{width}x{height} pixels is too large for a GIF (at most 65535 a side)")]
     TooLargeForGif { width: usize, height: usize },
-}
-
-/// The part of a `visualization_msgs/msg/Marker` the renderer needs: everything up to `points`
-/// (CDR is read in order, the rest of the message is ignored).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct MarkerHead {
-    header: Header,
-    ns: String,
-    id: i32,
-    r#type: i32,
-    action: i32,
-    pose: crate::ros::msg::Pose,
-    scale: crate::ros::msg::Vector3,
-    color: crate::ros::msg::ColorRGBA,
-    lifetime: crate::ros::msg::Duration,
-    frame_locked: bool,
-    points: Vec<Point>,
-}
-
-impl RosMessage for MarkerHead {
-    const TYPE_NAME: &'static str = "visualization_msgs/msg/Marker";
 }
 
 /// One frame of a bag: the cloth as a welded mesh, the robot's shapes and the scene's solid

@@ -3,8 +3,9 @@
 //! planes are kept apart as (point, normal) so the picture frames the cloth, not an unbounded
 //! plane, and each tile draws the plane as a square around what it frames.
 
+use super::marker::MarkerHead;
+use super::raster::Mesh;
 use super::shapes::tessellate;
-use super::{MarkerHead, Mesh};
 use crate::robot::Geometry;
 use crate::ros::msg::Marker;
 use crate::ros::obstacles::{OBSTACLE_COLOR, PLANE_NS};

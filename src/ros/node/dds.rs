@@ -217,6 +217,16 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         .filter(|_| scene.has(crate::scene::EffectKind::Wind))
         .map(|w| w.velocity.to_array());
     let core = SimLoop::new(scene, cfg, wall.now())?;
+    let q = core.quality();
+    match core.quality_ladder().last().filter(|_| q.adaptive) {
+        Some(low) => log::info!(
+            "adaptive quality: from the scene's ({}) down to ({low}) in {} levels, as far as \
+             real time needs",
+            q.quality,
+            q.levels
+        ),
+        None => log::info!("quality fixed at the scene's ({})", q.quality),
+    }
     log::info!(
         "drape node: scene {} ({} vertices), frame `{}`, {} Hz, {} layout, domain {}{}{}",
         params.scene.display(),
