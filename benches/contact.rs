@@ -31,6 +31,9 @@ struct Run {
     max_worst: f64,
     p99_end: f64,
     max_end: f64,
+    /// The frame of the worst max stretch, and the frames whose max stretch exceeds 1.02.
+    worst_frame: usize,
+    frames_over: usize,
     /// Deepest vertex below the sphere's radius (m; 0: none inside) and frames with any.
     penetration: f64,
     penetrating_frames: usize,
@@ -88,7 +91,7 @@ fn run(file: &str, res: usize, sphere: bool) -> Run {
         ..Run::default()
     };
     let mut touched = false;
-    for _ in 0..frames {
+    for f in 0..frames {
         let t = Instant::now();
         let m = sim.step().expect("bench scene stays stable").clone();
         r.wall_s += t.elapsed().as_secs_f64();
@@ -105,7 +108,10 @@ fn run(file: &str, res: usize, sphere: bool) -> Run {
         r.contacts_max = r.contacts_max.max(m.contacts);
         let (p99, max) = stretch(&sim, &edges, &mut ratios);
         r.p99_worst = r.p99_worst.max(p99);
-        r.max_worst = r.max_worst.max(max);
+        if max > r.max_worst {
+            (r.max_worst, r.worst_frame) = (max, f);
+        }
+        r.frames_over += usize::from(max > 1.02);
         (r.p99_end, r.max_end) = (p99, max);
         if sphere {
             let deepest = sim
@@ -145,7 +151,8 @@ fn main() {
     let resolutions: Vec<usize> = list("DRAPE_BENCH_RES", vec![32, 64, 128]);
     let scenes: Vec<String> = list("DRAPE_BENCH_SCENES", vec!["s1".into(), "s2".into()]);
     println!(
-        "scene res | wall s / sim s | stretch p99 max (worst frame) | p99 max (end) | \
+        "scene res | wall s / sim s | stretch p99 max (worst frame) at frame, frames over 1.02 | \
+         p99 max (end) | \
          penetration below r (m, frames) | CG/frame mean max | before contact | with contact \
          | force evals/frame | subdiv | contacts end max"
     );
@@ -162,12 +169,14 @@ fn main() {
             };
             let r = run(file, *res, sphere);
             println!(
-                "{} {res}x{res} | {:.3} | {:.4} {:.4} | {:.4} {:.4} | {:.2e} {} | {:.1} {} | {:.1} {} \
+                "{} {res}x{res} | {:.3} | {:.4} {:.4} at {}, {} | {:.4} {:.4} | {:.2e} {} | {:.1} {} | {:.1} {} \
                  | {:.1} {} | {:.2} | {} | {} {}",
                 scene.to_uppercase(),
                 r.wall_s / r.sim_s,
                 r.p99_worst,
                 r.max_worst,
+                r.worst_frame,
+                r.frames_over,
                 r.p99_end,
                 r.max_end,
                 r.penetration,
