@@ -3,7 +3,12 @@
 //! spacing, stretch 1500, 2 substeps per 1/60 s frame, robot swinging it, continuous collision).
 //!
 //! `cargo bench --bench implicit_scenes` prints, before criterion's timings, the CG iterations
-//! and Newton force evaluations per frame over a fixed run, so that time and work can be compared.
+//! and Newton force evaluations per frame over a fixed run, so that time and work can be compared,
+//! and the cost of one PCG iteration at 64x64 (issue 16, item 2) on S1 (`config/bench_s1.yaml`,
+//! the cloth on a sphere) and S2 (`bench_s2.yaml`, hanging): the solver's own count of flops and
+//! least bytes streamed per iteration (block CSR 3x3 product, V-cycle levels, vector passes), the
+//! measured wall time per iteration, this machine's memory bandwidth (a STREAM triad over
+//! buffers far larger than cache, both cores) and the ratio of the time to the bandwidth bound.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use drape::robot::RobotDriver;
@@ -53,7 +58,61 @@ fn summary(name: &str, res: usize, frames: usize) {
     );
 }
 
+/// STREAM's triad `a = b + s c` over three 32 MiB arrays on both cores: best of five, in bytes
+/// per second (24 bytes moved per element, write-allocate not counted, as STREAM does).
+fn triad_bandwidth() -> f64 {
+    use rayon::prelude::*;
+    let n = 4 << 20;
+    let (mut a, b, c) = (vec![0.0f64; n], vec![1.0f64; n], vec![2.0f64; n]);
+    let mut best = f64::INFINITY;
+    for k in 0..5 {
+        let s = 0.5 + k as f64;
+        let t = Instant::now();
+        a.par_chunks_mut(1 << 16)
+            .zip(b.par_chunks(1 << 16))
+            .zip(c.par_chunks(1 << 16))
+            .for_each(|((a, b), c)| {
+                for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                    *a = b + s * c;
+                }
+            });
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    std::hint::black_box(&a);
+    24.0 * n as f64 / best
+}
+
+/// Cost of one PCG iteration over `frames` frames of `name` at `res`x`res`.
+fn iteration_cost(name: &str, res: usize, frames: usize, bandwidth: f64) {
+    let (mut sim, mut driver) = load(name, res);
+    let (mut its, mut time, mut flops, mut bytes) = (0u64, 0.0, 0.0, 0.0);
+    for _ in 0..frames {
+        frame(&mut sim, &mut driver);
+        let m = sim.last_metrics();
+        its += u64::from(m.cg_iterations);
+        time += m.cg_time_s;
+        flops += m.cg_flops;
+        bytes += m.cg_bytes;
+    }
+    let k = its.max(1) as f64;
+    let (t, f, b) = (time / k, flops / k, bytes / k);
+    eprintln!(
+        "{name} {res}x{res}: one PCG iteration = {:.2} Mflop, {:.2} MB streamed at the least; \
+         measured {:.3} ms per iteration over {its} iterations; bandwidth bound {:.3} ms \
+         ({:.1} GB/s triad); measured / bound = {:.2}",
+        f * 1e-6,
+        b * 1e-6,
+        t * 1e3,
+        b / bandwidth * 1e3,
+        bandwidth * 1e-9,
+        t / (b / bandwidth),
+    );
+}
+
 fn scenes(c: &mut Criterion) {
+    let bandwidth = triad_bandwidth();
+    iteration_cost("bench_s1.yaml", 64, 120, bandwidth);
+    iteration_cost("bench_s2.yaml", 64, 120, bandwidth);
     summary("hanging.yaml", 64, 60);
     summary("robot_towel.yaml", 64, 60);
     let mut g = c.benchmark_group("implicit_scenes");

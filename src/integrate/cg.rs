@@ -13,6 +13,30 @@ pub(crate) struct SolveStats {
     pub iterations: u32,
     /// `|S (b - A dv)| / |S b|` at exit.
     pub residual: f64,
+    /// Wall time of the iterations (the set-up before the first is not counted).
+    pub seconds: f64,
+    /// Floating-point operations and least bytes streamed by one iteration (see
+    /// [`iteration_cost`]).
+    pub flops: f64,
+    pub bytes: f64,
+}
+
+/// Floating-point operations and the least bytes one PCG iteration below streams: the product
+/// `A c` ([`BlockCsr::mul_bytes`]), the preconditioner (the V-cycle's
+/// [`Multigrid::apply_cost`], or block Jacobi's 3x3 inverse per vertex), and the vector passes
+/// of the loop (filter and dot of `q`; `dv`, `r` and `|r|^2`; the filter of `M^-1 r`; `r . s`;
+/// `c = s + beta c`: 16 reads or writes of `Vec3` and two of the filter per vertex).
+pub(crate) fn iteration_cost(a: &BlockCsr, mg: Option<&Multigrid>) -> (f64, f64) {
+    let n = a.rows() as f64;
+    let filter = std::mem::size_of::<Filter>() as f64;
+    let (pf, pb) = match mg {
+        Some(mg) => mg.apply_cost(),
+        None => (15.0 * n, n * (72.0 + 2.0 * 24.0)),
+    };
+    (
+        a.mul_flops() + pf + 60.0 * n,
+        a.mul_bytes() + pb + n * (16.0 * 24.0 + 2.0 * filter),
+    )
 }
 
 /// Scratch vectors of the modified PCG.
@@ -152,6 +176,8 @@ impl Pcg {
         precondition(&self.pinv, &mut mg, &self.r, &mut self.c);
         let mut delta = dot(&self.r, &self.c);
         let mut iterations = 0;
+        let (flops, bytes) = iteration_cost(a, mg.as_deref());
+        let clock = std::time::Instant::now();
         while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
             a.mul(&self.c, &mut self.q);
             let mut cq = 0.0;
@@ -186,6 +212,9 @@ impl Pcg {
         SolveStats {
             iterations,
             residual: (rnorm2 / bnorm2).sqrt(),
+            seconds: clock.elapsed().as_secs_f64(),
+            flops,
+            bytes,
         }
     }
 }

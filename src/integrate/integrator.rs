@@ -44,6 +44,12 @@ pub struct StepReport {
     pub cg_iterations: u32,
     /// Relative residual the conjugate gradient reached (implicit only; 0 otherwise).
     pub cg_residual: f64,
+    /// Wall time of the conjugate-gradient iterations (s), and their floating-point operations
+    /// and least bytes streamed (summed over the iterations; see the solver's cost model), so
+    /// that time per iteration can be set against the memory-bandwidth bound.
+    pub cg_time_s: f64,
+    pub cg_flops: f64,
+    pub cg_bytes: f64,
     /// The impulse (N s) each vertex received from its constraint filter during the step,
     /// `(I - S)(M dv - h f)`, when the method knows it (implicit: from the system it solved, so
     /// it holds no linearisation error); empty otherwise. Entries of free vertices are zero.
@@ -60,6 +66,9 @@ impl StepReport {
         self.force_evaluations = force_evaluations;
         self.cg_iterations = 0;
         self.cg_residual = 0.0;
+        self.cg_time_s = 0.0;
+        self.cg_flops = 0.0;
+        self.cg_bytes = 0.0;
         self.constraint_impulses.clear();
         self.contact_forces.clear();
     }

@@ -144,6 +144,19 @@ impl BlockCsr {
         self.zero = false;
     }
 
+    /// Bytes one `mul` streams at the least: every block (f64 3x3) with its column index, the
+    /// row starts, `x` read once and `y` written once (gathered reads of `x` assumed cached).
+    pub fn mul_bytes(&self) -> f64 {
+        let n = self.rows() as f64;
+        let blocks = self.cols.len() as f64;
+        blocks * (72.0 + 4.0) + (n + 1.0) * 8.0 + 2.0 * 24.0 * n
+    }
+
+    /// Floating-point operations of one `mul`: a multiply and an add per block entry.
+    pub fn mul_flops(&self) -> f64 {
+        18.0 * self.cols.len() as f64
+    }
+
     /// True when every block is zero (nothing added since the last clear).
     pub fn is_zero(&self) -> bool {
         self.zero

@@ -14,6 +14,11 @@ pub struct StepMetrics {
     pub force_evaluations: u32,
     pub cg_iterations: u32,
     pub cg_residual_max: f64,
+    /// Wall time of the conjugate-gradient iterations (s) and their floating-point operations
+    /// and least bytes streamed (see [`StepReport::cg_bytes`]).
+    pub cg_time_s: f64,
+    pub cg_flops: f64,
+    pub cg_bytes: f64,
     pub kinetic_energy: f64,
     pub potential_energy: f64,
     pub max_speed: f64,
@@ -37,6 +42,9 @@ impl StepMetrics {
         self.force_evaluations += stats.force_evaluations;
         self.cg_iterations += stats.cg_iterations;
         self.cg_residual_max = self.cg_residual_max.max(stats.cg_residual);
+        self.cg_time_s += stats.cg_time_s;
+        self.cg_flops += stats.cg_flops;
+        self.cg_bytes += stats.cg_bytes;
     }
 
     /// Adds one collision pass: the last substep's contacts and culling, the deepest

@@ -12,8 +12,8 @@
 //!
 //! The preconditioner is smoothed-aggregation multigrid on the filtered operator (see
 //! [`super::precond`]); its hierarchy gets new values along the same aggregates when the
-//! iteration count drifts up, a full rebuild when that no longer helps, and block Jacobi takes
-//! over whenever the hierarchy cannot be built. The solve starts from the combination of the
+//! iteration count drifts up or a step's contacts changed the filter, a full rebuild when that
+//! no longer helps, and block Jacobi takes over whenever the hierarchy cannot be built. The solve starts from the combination of the
 //! last two steps' velocity changes that is best in the energy norm.
 //!
 //! Files by concern: `settings.rs` (the scene's solver settings), `solver.rs` (the solver's

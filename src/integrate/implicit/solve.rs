@@ -15,6 +15,11 @@ impl Implicit {
     /// start directions (else `dv` alone).
     pub(super) fn solve(&mut self, filt: &[Filter], history: bool) -> SolveStats {
         let (tol, max_it) = (self.settings.cg_tolerance, self.settings.cg_max_iterations);
+        if history {
+            if let Some(h) = self.hierarchy.as_mut() {
+                h.rebuild |= h.filter_changed(filt);
+            }
+        }
         let use_mg = self.update_hierarchy(filt).is_some();
         let Some(a) = self.a.as_ref() else {
             unreachable!("prepared above");
@@ -106,6 +111,10 @@ impl Implicit {
                         h.age += 1;
                         h.steps = if rebuild { 0 } else { h.steps + 1 };
                         h.rebuild = false;
+                        if rebuild {
+                            h.filter.clear();
+                            h.filter.extend_from_slice(filt);
+                        }
                         return self.hierarchy.as_mut().map(|h| &mut h.mg);
                     }
                     Err(e) => {
@@ -126,6 +135,7 @@ impl Implicit {
                     iterations_at_full: 0,
                     excess: 0,
                     rebuild: false,
+                    filter: filt.to_vec(),
                 });
                 self.hierarchy.as_mut().map(|h| &mut h.mg)
             }

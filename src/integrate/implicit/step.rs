@@ -5,6 +5,7 @@
 use super::newton::potential;
 use super::solver::Implicit;
 use crate::effects::State;
+use crate::integrate::cg::SolveStats;
 use crate::integrate::integrator::{Integrator, StepReport};
 use crate::integrate::Dynamics;
 use crate::linalg::{scratch, Filter};
@@ -53,7 +54,9 @@ impl Implicit {
         }
         // The start directions: the last two steps' velocity changes.
         self.last.clone_from(&self.dv);
+        (report.cg_time_s, report.cg_flops, report.cg_bytes) = (0.0, 0.0, 0.0);
         let mut stats = self.solve(filt, true);
+        tally(report, &stats);
         std::mem::swap(&mut self.older, &mut self.last);
         let mut cg_iterations = stats.iterations;
         // Contact holds to settle (their impulses cost a product with the matrix).
@@ -73,6 +76,7 @@ impl Implicit {
                 break;
             }
             stats = self.solve(filt, false);
+            tally(report, &stats);
             cg_iterations += stats.iterations;
             impulses_current = false;
         }
@@ -134,6 +138,7 @@ impl Implicit {
             self.dv.fill(Vec3::ZERO);
             self.z.fill(Vec3::ZERO);
             stats = self.solve(filt, false);
+            tally(report, &stats);
             cg_iterations += stats.iterations;
             for (total, c) in self.delta.iter_mut().zip(&self.dv) {
                 *total += *c;
@@ -167,4 +172,12 @@ impl Implicit {
         report.cg_iterations = cg_iterations;
         report.cg_residual = stats.residual;
     }
+}
+
+/// Adds one solve's iteration time and work to the step's report.
+fn tally(report: &mut StepReport, s: &SolveStats) {
+    let its = f64::from(s.iterations);
+    report.cg_time_s += s.seconds;
+    report.cg_flops += s.flops * its;
+    report.cg_bytes += s.bytes * its;
 }

@@ -154,6 +154,49 @@ impl Multigrid {
         Ok(())
     }
 
+    /// Floating-point operations and least bytes streamed by one [`Multigrid::apply`] (see
+    /// [`super::cycle`]): per level above the coarsest, the forward sweep from zero and the
+    /// residual after it read the level's blocks once together, the backward sweep reads them
+    /// again, restriction and prolongation read `P^T` and `P`; blocks are `Mat3A` (48 bytes)
+    /// with a `u32` column, vectors `Vec3A` (16 bytes); the coarsest level's dense factor is
+    /// read twice (forward and back substitution over its lower triangle).
+    pub fn apply_cost(&self) -> (f64, f64) {
+        const BLOCK: f64 = 48.0 + 4.0;
+        const VEC: f64 = 16.0;
+        let (mut flops, mut bytes) = (0.0, 0.0);
+        let n0 = self.rows() as f64;
+        // In and out of single precision: read r (f64) and write b, read x and write z.
+        bytes += n0 * (24.0 + VEC) * 2.0;
+        for (k, l) in self.levels.iter().enumerate() {
+            let n = l.a.rows() as f64;
+            let a = l.a.cols.len() as f64;
+            if k + 1 == self.levels.len() {
+                match self.dense.as_ref() {
+                    Some(d) => {
+                        let m = d.n as f64;
+                        flops += 2.0 * m * m;
+                        bytes += m * m * 8.0 + 2.0 * n * VEC;
+                    }
+                    None => {
+                        // COARSE_SWEEPS symmetric sweeps over the level.
+                        flops += 16.0 * (18.0 * a + 18.0 * n);
+                        bytes += 16.0 * (a * BLOCK + n * (48.0 + 3.0 * VEC));
+                    }
+                }
+                break;
+            }
+            let p = l.p.cols.len() as f64;
+            // Sweeps: two passes over the blocks (forward + residual, backward), dinv twice.
+            flops += 2.0 * 18.0 * a + 2.0 * 18.0 * n;
+            bytes += 2.0 * a * BLOCK + 2.0 * (l.a.row_start.len() as f64) * 8.0;
+            bytes += 2.0 * n * 48.0 + n * VEC * 8.0;
+            // Restriction and prolongation.
+            flops += 2.0 * 18.0 * p;
+            bytes += 2.0 * p * BLOCK + n * VEC * 2.0;
+        }
+        (flops, bytes)
+    }
+
     /// Finest-level matrix (for reuse of its storage).
     pub fn take_finest(&mut self) -> Csr {
         std::mem::take(&mut self.levels[0].a)

@@ -1,0 +1,211 @@
+//! Issue 16's benchmark: scene S1 (a 1 m cloth dropped flat onto a fixed sphere, 2 s,
+//! `config/bench_s1.yaml`) and S2 (the same cloth hanging from two corners, no contact,
+//! `config/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole simulation.
+//!
+//! `cargo bench --bench contact` prints one row per run: wall seconds per simulated second
+//! (the steps alone, scene build excluded), p99 and max structural edge stretch (length over
+//! rest, worst frame of the run and at the end), the deepest vertex below the sphere's radius
+//! (S1), CG iterations per frame (mean and max, and for S1 split into the frames before the
+//! first contact and those with contacts), force evaluations per frame and the contacts at the
+//! end. `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
+//! scenes. It uses only `Simulation`'s public metrics, so the same file runs on an older
+//! checkout for a ratio in one session.
+
+use drape::cloth::topology::{springs, SpringKind};
+use drape::scene::Scene;
+use drape::sim::Simulation;
+use std::path::Path;
+use std::time::Instant;
+
+/// The sphere of S1 (centre z, radius), as in `config/bench_s1.yaml`.
+const SPHERE: ([f64; 3], f64) = ([0.0, 0.0, 0.5], 0.3);
+
+/// What one run measured.
+#[derive(Debug, Default)]
+struct Run {
+    frames: usize,
+    wall_s: f64,
+    sim_s: f64,
+    /// Worst frame's p99 and max structural stretch, and the end state's.
+    p99_worst: f64,
+    max_worst: f64,
+    p99_end: f64,
+    max_end: f64,
+    /// The frame of the worst max stretch, and the frames whose max stretch exceeds 1.02.
+    worst_frame: usize,
+    frames_over: usize,
+    /// Deepest vertex below the sphere's radius (m; 0: none inside) and frames with any.
+    penetration: f64,
+    penetrating_frames: usize,
+    /// CG iterations per frame: all frames, frames without contacts before the first contact,
+    /// frames with contacts.
+    cg: Vec<u32>,
+    cg_free: Vec<u32>,
+    cg_contact: Vec<u32>,
+    force_evaluations: u64,
+    subdivisions: u64,
+    contacts_end: usize,
+    contacts_max: usize,
+}
+
+fn load(file: &str, res: usize) -> Simulation {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config")
+        .join(file);
+    let mut s = Scene::load(&path).expect("bundled bench scene");
+    s.cloths[0].grid.resolution = [res, res];
+    s.build().expect("valid scene")
+}
+
+/// Structural edges (vertex pair, rest length) of the first cloth piece.
+fn structural(sim: &Simulation) -> Vec<(usize, usize, f64)> {
+    sim.cloth
+        .pieces
+        .iter()
+        .flat_map(|p| springs(p, SpringKind::Structural))
+        .map(|s| (s.i as usize, s.j as usize, s.rest))
+        .collect()
+}
+
+/// p99 and max of length over rest across `edges`.
+fn stretch(sim: &Simulation, edges: &[(usize, usize, f64)], ratios: &mut Vec<f64>) -> (f64, f64) {
+    ratios.clear();
+    ratios.extend(
+        edges
+            .iter()
+            .map(|&(i, j, rest)| (sim.cloth.x[i] - sim.cloth.x[j]).length() / rest),
+    );
+    ratios.sort_by(f64::total_cmp);
+    let p99 = ratios[((ratios.len() as f64 * 0.99).ceil() as usize).clamp(1, ratios.len()) - 1];
+    (p99, ratios[ratios.len() - 1])
+}
+
+fn run(file: &str, res: usize, sphere: bool) -> Run {
+    let mut sim = load(file, res);
+    let edges = structural(&sim);
+    let mut ratios = Vec::with_capacity(edges.len());
+    let frames = (2.0 / sim.settings.dt).round() as usize;
+    let centre = drape::Vec3::from_array(SPHERE.0);
+    let mut r = Run {
+        frames,
+        ..Run::default()
+    };
+    let mut touched = false;
+    for f in 0..frames {
+        let t = Instant::now();
+        let m = sim.step().expect("bench scene stays stable").clone();
+        r.wall_s += t.elapsed().as_secs_f64();
+        r.cg.push(m.cg_iterations);
+        touched |= m.contacts > 0;
+        if m.contacts > 0 {
+            r.cg_contact.push(m.cg_iterations);
+        } else if !touched {
+            r.cg_free.push(m.cg_iterations);
+        }
+        r.force_evaluations += u64::from(m.force_evaluations);
+        r.subdivisions += u64::from(m.subdivisions);
+        r.contacts_end = m.contacts;
+        r.contacts_max = r.contacts_max.max(m.contacts);
+        let (p99, max) = stretch(&sim, &edges, &mut ratios);
+        r.p99_worst = r.p99_worst.max(p99);
+        if max > r.max_worst {
+            (r.max_worst, r.worst_frame) = (max, f);
+        }
+        r.frames_over += usize::from(max > 1.02);
+        (r.p99_end, r.max_end) = (p99, max);
+        if sphere {
+            let deepest = sim
+                .cloth
+                .x
+                .iter()
+                .map(|x| SPHERE.1 - (*x - centre).length())
+                .fold(0.0, f64::max);
+            r.penetration = r.penetration.max(deepest);
+            r.penetrating_frames += usize::from(deepest > 0.0);
+        }
+    }
+    r.sim_s = frames as f64 * sim.settings.dt;
+    r
+}
+
+fn mean(v: &[u32]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64
+}
+
+fn max(v: &[u32]) -> u32 {
+    v.iter().copied().max().unwrap_or(0)
+}
+
+fn list<T: std::str::FromStr>(var: &str, default: Vec<T>) -> Vec<T> {
+    match std::env::var(var) {
+        Ok(s) => s.split(',').filter_map(|x| x.trim().parse().ok()).collect(),
+        Err(_) => default,
+    }
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; a filter argument is not used.
+    let resolutions: Vec<usize> = list("DRAPE_BENCH_RES", vec![32, 64, 128]);
+    let scenes: Vec<String> = list("DRAPE_BENCH_SCENES", vec!["s1".into(), "s2".into()]);
+    println!(
+        "scene res | wall s / sim s | stretch p99 max (worst frame) at frame, frames over 1.02 | \
+         p99 max (end) | \
+         penetration below r (m, frames) | CG/frame mean max | before contact | with contact \
+         | force evals/frame | subdiv | contacts end max"
+    );
+    let mut table = Vec::new();
+    for res in &resolutions {
+        for scene in &scenes {
+            let (file, sphere) = match scene.as_str() {
+                "s1" => ("bench_s1.yaml", true),
+                "s2" => ("bench_s2.yaml", false),
+                other => {
+                    eprintln!("unknown scene {other} (s1, s2)");
+                    continue;
+                }
+            };
+            let r = run(file, *res, sphere);
+            println!(
+                "{} {res}x{res} | {:.3} | {:.4} {:.4} at {}, {} | {:.4} {:.4} | {:.2e} {} | {:.1} {} | {:.1} {} \
+                 | {:.1} {} | {:.2} | {} | {} {}",
+                scene.to_uppercase(),
+                r.wall_s / r.sim_s,
+                r.p99_worst,
+                r.max_worst,
+                r.worst_frame,
+                r.frames_over,
+                r.p99_end,
+                r.max_end,
+                r.penetration,
+                r.penetrating_frames,
+                mean(&r.cg),
+                max(&r.cg),
+                mean(&r.cg_free),
+                max(&r.cg_free),
+                mean(&r.cg_contact),
+                max(&r.cg_contact),
+                r.force_evaluations as f64 / r.frames as f64,
+                r.subdivisions,
+                r.contacts_end,
+                r.contacts_max,
+            );
+            table.push((scene.clone(), *res, r));
+        }
+    }
+    // Item 1: iterations under contact against the same cloth without contact (S2), per
+    // resolution.
+    for res in &resolutions {
+        let find = |s: &str| table.iter().find(|(n, r, _)| n == s && r == res);
+        if let (Some((_, _, s1)), Some((_, _, s2))) = (find("s1"), find("s2")) {
+            println!(
+                "{res}x{res}: CG per frame with contact (S1) / without (S2) = {:.2}; \
+                 wall S1 / S2 = {:.2}",
+                mean(&s1.cg_contact) / mean(&s2.cg).max(1e-9),
+                s1.wall_s / s2.wall_s.max(1e-9),
+            );
+        }
+    }
+}
