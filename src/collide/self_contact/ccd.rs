@@ -24,7 +24,7 @@ impl SelfCollider {
         h: f64,
         correct: bool,
     ) -> usize {
-        self.broad_phase(x0, x1, |i| th[i] * CCD_ETA_FRACTION * 2.0, false);
+        self.broad_phase(x0, x1, |i| th[i] * CCD_ETA_FRACTION * 2.0, false, false);
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Detect in parallel on the current positions, then answer the hits in order
@@ -36,15 +36,15 @@ impl SelfCollider {
             let xr: &[Vec3] = x1;
             pairs
                 .par_iter()
-                .map(|&(v, t)| this.vt_hit(v, t, x0, xr, th).is_some())
+                .map(|&(v, t)| this.vt_hit(v, t, x0, xr, th).is_some() as u8)
                 .collect_into_vec(&mut flag_vt);
             pairs_ee
                 .par_iter()
-                .map(|&(a, b)| this.ee_hit(a, b, x0, xr, th).is_some())
+                .map(|&(a, b)| this.ee_hit(a, b, x0, xr, th).is_some() as u8)
                 .collect_into_vec(&mut flag_ee);
         }
-        let hits = flag_vt.iter().chain(&flag_ee).filter(|f| **f).count();
-        for (&(v, t), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f) {
+        let hits = flag_vt.iter().chain(&flag_ee).filter(|f| **f != 0).count();
+        for (&(v, t), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f != 0) {
             if let Some((st, nrm)) = self.vt_hit(v, t, x0, x1, th) {
                 if correct {
                     self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
@@ -53,7 +53,7 @@ impl SelfCollider {
                 }
             }
         }
-        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f) {
+        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f != 0) {
             if let Some((st, nrm)) = self.ee_hit(e1, e2, x0, x1, th) {
                 if correct {
                     self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
@@ -65,6 +65,8 @@ impl SelfCollider {
         self.flags = (flag_vt, flag_ee);
         self.pairs = pairs;
         self.pairs_ee = pairs_ee;
+        self.report.ccd_passes += 1;
+        self.report.ccd_hits += hits;
         hits
     }
 

@@ -22,7 +22,7 @@ impl SelfCollider {
     ) -> usize {
         // Query boxes: end positions inflated by twice the radius (pair distance).
         let max_th = th.iter().copied().fold(0.0, f64::max);
-        self.broad_phase(x1, x1, |i| th[i] + max_th, vertex_vertex);
+        self.broad_phase(x1, x1, |i| th[i] + max_th, vertex_vertex, true);
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Find close pairs in parallel, then answer them in order (Gauss-Seidel), re-measuring
@@ -31,7 +31,7 @@ impl SelfCollider {
         {
             let this = &*self;
             let xr: &[Vec3] = x1;
-            let close = |st: &Stencil| st.eval(xr).length() < st.gap(th);
+            let close = |st: &Stencil| (st.eval(xr).length() < st.gap(th)) as u8;
             pairs
                 .par_iter()
                 .map(|&(a, b)| close(&this.close_stencil(a, b, xr, vertex_vertex)))
@@ -42,17 +42,18 @@ impl SelfCollider {
                 .collect_into_vec(&mut flag_ee);
         }
         let mut count = 0;
-        for (&(a, b), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f) {
+        for (&(a, b), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f != 0) {
             let st = self.close_stencil(a, b, x1, vertex_vertex);
             count += self.repel(&st, x0, x1, v1, th, friction, h) as usize;
         }
-        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f) {
+        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f != 0) {
             let st = self.ee_close_stencil(e1, e2, x1);
             count += self.repel(&st, x0, x1, v1, th, friction, h) as usize;
         }
         self.flags = (flag_vt, flag_ee);
         self.pairs = pairs;
         self.pairs_ee = pairs_ee;
+        self.report.repulsions += count;
         count
     }
 

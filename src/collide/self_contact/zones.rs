@@ -104,6 +104,9 @@ impl SelfCollider {
             }
             self.zone_members[slot[r] as usize].push(i);
         }
+        self.report.zones = self.report.zones.max(roots.len());
+        let largest = self.zone_members[..roots.len()].iter().map(Vec::len).max();
+        self.report.largest_zone = self.report.largest_zone.max(largest.unwrap_or(0));
         let inv_h = if h > 0.0 { 1.0 / h } else { 0.0 };
         for z in 0..roots.len() {
             let members = &self.zone_members[z];
