@@ -197,13 +197,21 @@ pub fn run(scene: &Scene, seconds: f64) -> Judged {
     let edges = rest_edges(&sim, !scene.garments.is_empty());
     let frames = (seconds / sim.settings.dt).round() as usize;
     let mut j = Judged::default();
+    let trace = std::env::var("SELFCOL_TRACE").is_ok();
     for f in 0..frames {
         if let Some(d) = driver.as_mut() {
             let t = sim.time() + sim.settings.dt;
             d.advance(&mut sim, t);
         }
-        match sim.step() {
+        match sim.step().map(|m| m.clone()) {
             Ok(m) => {
+                if trace {
+                    let (s, e) = max_stretch(&sim.cloth.x, &edges);
+                    eprintln!(
+                        "t {:.3} stretch {s:.3} {e:?} speed {:.2} {:?}",
+                        m.time, m.max_speed, m.self_contact
+                    );
+                }
                 j.unresolved += m.unresolved_contacts;
                 j.collision_s += m.collision_time_s;
                 j.max_speed = j.max_speed.max(m.max_speed);

@@ -89,7 +89,10 @@ impl SelfCollider {
             [x1[a], x1[b], x1[c]],
             eta,
         )?;
-        Some((self.vt_stencil(v, t, hit.bary), hit.normal))
+        let st = self.vt_stencil(v, t, hit.bary);
+        // All four vertices kinematic: the scene prescribes this motion and nothing here can
+        // change it; as a hit it only grew impact zones around it (see `zones`).
+        (st.inv_mass(&self.w) > 0.0).then_some((st, hit.normal))
     }
 
     fn ee_hit(
@@ -111,7 +114,8 @@ impl SelfCollider {
             [x1[b0], x1[b1]],
             eta,
         )?;
-        Some((self.ee_stencil(e1, e2, hit.s, hit.u), hit.normal))
+        let st = self.ee_stencil(e1, e2, hit.s, hit.u);
+        (st.inv_mass(&self.w) > 0.0).then_some((st, hit.normal))
     }
 
     /// Moves a crossing pair's end positions so that, along the hit normal oriented to the side
