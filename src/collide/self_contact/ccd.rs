@@ -21,7 +21,6 @@ impl SelfCollider {
         x1: &mut [Vec3],
         v1: &mut [Vec3],
         th: &[f64],
-        h: f64,
         correct: bool,
     ) -> usize {
         self.broad_phase(x0, x1, |i| th[i] * CCD_ETA_FRACTION * 2.0, false, false);
@@ -47,7 +46,7 @@ impl SelfCollider {
         for (&(v, t), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f != 0) {
             if let Some((st, nrm)) = self.vt_hit(v, t, x0, x1, th) {
                 if correct {
-                    self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
+                    self.ccd_correct(&st, nrm, x0, x1, v1, th);
                 } else {
                     self.merge(&st);
                 }
@@ -56,7 +55,7 @@ impl SelfCollider {
         for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f != 0) {
             if let Some((st, nrm)) = self.ee_hit(e1, e2, x0, x1, th) {
                 if correct {
-                    self.ccd_correct(&st, nrm, x0, x1, v1, th, h);
+                    self.ccd_correct(&st, nrm, x0, x1, v1, th);
                 } else {
                     self.merge(&st);
                 }
@@ -119,7 +118,8 @@ impl SelfCollider {
     }
 
     /// Moves a crossing pair's end positions so that, along the hit normal oriented to the side
-    /// the pair started on, it ends a small gap apart; velocities follow the changed path (dx / h).
+    /// the pair started on, it ends a small gap apart, and removes its approaching normal
+    /// velocity (an inelastic impact).
     #[allow(clippy::too_many_arguments)]
     fn ccd_correct(
         &self,
@@ -129,7 +129,6 @@ impl SelfCollider {
         x1: &mut [Vec3],
         v1: &mut [Vec3],
         th: &[f64],
-        h: f64,
     ) {
         let r0 = st.eval(x0);
         let mut n = normal.normalize_or_zero();
@@ -141,10 +140,13 @@ impl SelfCollider {
         }
         let gap = CCD_GAP_FRACTION * st.gap(th);
         let d1 = n.dot(st.eval(x1));
-        if d1 < gap {
-            let d = n * (gap - d1);
-            if st.apply(x1, &self.w, d) && h > 0.0 {
-                st.apply(v1, &self.w, d / h);
+        if d1 < gap && st.apply(x1, &self.w, n * (gap - d1)) {
+            // The impact is inelastic: the pair's approaching normal velocity goes, nothing
+            // more. Adding the position change over h instead (as before) turned a deep
+            // correction into speed: 14.5 m/s on robot_cape where the arms reverse (t = 1.5 s).
+            let vn = n.dot(st.eval(v1));
+            if vn < 0.0 {
+                st.apply(v1, &self.w, n * -vn);
             }
         }
     }

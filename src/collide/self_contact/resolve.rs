@@ -65,7 +65,7 @@ impl SelfCollider {
                 self.repulsion_pass(x0, x1, v1, thickness, friction, h, false);
                 let mut clean = false;
                 for _ in 0..iters {
-                    if self.ccd_pass(x0, x1, v1, thickness, h, true) == 0 {
+                    if self.ccd_pass(x0, x1, v1, thickness, true) == 0 {
                         clean = true;
                         break;
                     }

@@ -80,13 +80,13 @@ impl SelfCollider {
         self.parent.clear();
         self.parent.extend(0..n as u32);
         for _ in 0..zone_iterations.max(1) {
-            if self.ccd_pass(x0, x1, v1, th, h, false) == 0 {
+            if self.ccd_pass(x0, x1, v1, th, false) == 0 {
                 return 0;
             }
             self.rigidify(x0, x1, v1, h);
         }
         // Last resort: vertices of zones stop at x0 (always intersection-free if x0 was).
-        if self.ccd_pass(x0, x1, v1, th, h, false) == 0 {
+        if self.ccd_pass(x0, x1, v1, th, false) == 0 {
             return 0;
         }
         self.mark_zones(n);
@@ -96,7 +96,7 @@ impl SelfCollider {
                 v1[i] = Vec3::ZERO;
             }
         }
-        let stuck = self.ccd_pass(x0, x1, v1, th, h, false);
+        let stuck = self.ccd_pass(x0, x1, v1, th, false);
         if stuck > 0 {
             log::warn!("self-collision fail-safe left {stuck} colliding pairs");
         }
