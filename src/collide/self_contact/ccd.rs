@@ -23,7 +23,14 @@ impl SelfCollider {
         th: &[f64],
         correct: bool,
     ) -> usize {
-        self.broad_phase(x0, x1, |i| th[i] * CCD_ETA_FRACTION * 2.0, false, false);
+        self.broad_phase(
+            x0,
+            x1,
+            |i| th[i] * CCD_ETA_FRACTION * 2.0,
+            false,
+            false,
+            true,
+        );
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Detect in parallel on the current positions, then answer the hits in order

@@ -10,7 +10,9 @@ impl SelfCollider {
     /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
     /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
     /// Pairs across a seam being sewn are never candidates; with `proximity`, neither are pairs
-    /// closer than their contact distance in the rest shape (see `exempt`).
+    /// closer than their contact distance in the rest shape (see `exempt`). Without `with_edges`
+    /// no edge-edge pairs are collected.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn broad_phase(
         &mut self,
         xa: &[Vec3],
@@ -18,6 +20,7 @@ impl SelfCollider {
         margin: impl Fn(usize) -> f64,
         vertex_vertex: bool,
         proximity: bool,
+        with_edges: bool,
     ) {
         let none = RestShape::default();
         let rest = match (&self.rest, proximity) {
@@ -82,6 +85,11 @@ impl SelfCollider {
             },
             &mut self.pairs,
         );
+        self.report.candidates += self.pairs.len();
+        if !with_edges {
+            self.pairs_ee.clear();
+            return;
+        }
         let edges = &self.edges;
         self.iboxes.clear();
         self.iboxes.extend(edges.iter().map(|e| {
@@ -113,6 +121,6 @@ impl SelfCollider {
             },
             &mut self.pairs_ee,
         );
-        self.report.candidates += self.pairs.len() + self.pairs_ee.len();
+        self.report.candidates += self.pairs_ee.len();
     }
 }
