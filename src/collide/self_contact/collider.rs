@@ -1,8 +1,8 @@
 //! The self-contact collider: the cloth's triangles, edges and 1-ring, the scratch buffers of
 //! the passes, and the stencils of its pairs.
 
-use super::exempt::RestShape;
 use super::report::SelfContactReport;
+use super::rest::RestShape;
 use super::stencil::Stencil;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
 

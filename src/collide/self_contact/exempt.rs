@@ -15,53 +15,11 @@
 //! a bit are skipped by every self-contact query until the weld makes them one piece.
 
 use super::collider::{shares_vertex, SelfCollider};
+use super::rest::RestShape;
 use crate::collide::narrow;
 use crate::Vec3;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-
-/// Sorted lists per element (CSR): `items[start[k]..start[k + 1]]`.
-#[derive(Default)]
-pub(super) struct Csr {
-    start: Vec<u32>,
-    items: Vec<u32>,
-}
-
-impl Csr {
-    fn push(&mut self, row: &mut Vec<u32>) {
-        if self.start.is_empty() {
-            self.start.push(0);
-        }
-        row.sort_unstable();
-        row.dedup();
-        self.items.extend_from_slice(row);
-        self.start.push(self.items.len() as u32);
-        row.clear();
-    }
-
-    pub fn contains(&self, k: u32, item: u32) -> bool {
-        match (self.start.get(k as usize), self.start.get(k as usize + 1)) {
-            (Some(&s), Some(&e)) => self.items[s as usize..e as usize]
-                .binary_search(&item)
-                .is_ok(),
-            _ => false,
-        }
-    }
-
-    pub fn len(&self) -> usize {
-        self.items.len()
-    }
-}
-
-/// The pairs that are closer than their contact distance in the rest shape (and near in the
-/// mesh), built from the first state the collider sees: per vertex its triangles and vertices,
-/// per edge its edges.
-#[derive(Default)]
-pub(super) struct RestShape {
-    pub vt: Csr,
-    pub vv: Csr,
-    pub ee: Csr,
-}
 
 /// Vertices within mesh (graph) distance `radius` of each vertex over the edges at `x`, as CSR.
 fn neighbourhoods(
@@ -128,13 +86,6 @@ fn bits(seam_bits: &[u64], vs: &[u32]) -> u64 {
 /// the collider's per-vertex seam bits).
 pub(super) fn across_seam(seam_bits: &[u64], a: &[u32], b: &[u32]) -> bool {
     !seam_bits.is_empty() && bits(seam_bits, a) & bits(seam_bits, b) != 0
-}
-
-impl RestShape {
-    /// Rest-close pairs: vertex-triangle plus edge-edge (each edge pair once).
-    pub fn pairs(&self) -> usize {
-        self.vt.len() + self.ee.len() / 2
-    }
 }
 
 impl SelfCollider {

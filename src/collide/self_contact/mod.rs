@@ -11,7 +11,7 @@
 //!
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
 //! `pairs` (broad phase), `exempt` (pairs that are no contact: rest proximity, seams being
-//! sewn), one query per file (`proximity`, `ccd`, `intersections`), `zones` (the impact-zone
+//! sewn; `rest` holds the rest-close lists), one query per file (`proximity`, `ccd`, `intersections`), `zones` (the impact-zone
 //! fail-safe), `resolve` (their order per detection mode), `report` (its counts).
 
 mod ccd;
@@ -22,6 +22,7 @@ mod pairs;
 mod proximity;
 mod report;
 mod resolve;
+mod rest;
 mod stencil;
 mod zones;
 

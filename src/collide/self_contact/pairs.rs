@@ -2,7 +2,8 @@
 //! over swept boxes.
 
 use super::collider::{shares_vertex, SelfCollider};
-use super::exempt::{across_seam, RestShape};
+use super::exempt::across_seam;
+use super::rest::RestShape;
 use crate::collide::broad::{cell_size, collect_pairs, Aabb};
 use crate::Vec3;
 

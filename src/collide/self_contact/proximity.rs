@@ -13,6 +13,7 @@ impl SelfCollider {
     /// pairs keep the layers apart and CCD answers edges that cross, at half the cost
     /// (robot_pick_towel: the collision stage 11.1 s -> 5.1 s over 4 s simulated, still no
     /// self-intersection).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn repulsion_pass(
         &mut self,
         x0: &[Vec3],
