@@ -137,10 +137,10 @@ fn report(name: &str, scale: usize, seconds: Option<f64>) -> Judged {
 }
 
 /// Measurement table: `SELFCOL_SCENES=a.yaml,b.yaml SELFCOL_SCALE=2 SELFCOL_SECONDS=1
-/// cargo test --test self_collision_scenes table -- --ignored --nocapture`.
+/// cargo test --test self_collision_scenes print_scenes -- --ignored --nocapture`.
 #[test]
 #[ignore = "measurement: prints the table"]
-fn table() {
+fn print_scenes() {
     let list = std::env::var("SELFCOL_SCENES").unwrap_or_default();
     let scale = std::env::var("SELFCOL_SCALE")
         .ok()
