@@ -49,6 +49,10 @@ cases!(
     pinned_inside_obstacle,
     wind_50_m_s,
     long_run_10_min,
+    self_towel_shaken_at_velocity_limits,
+    self_cape_under_swinging_arms,
+    self_sleeve_sewn_and_worn,
+    self_towel_picked_from_table,
 );
 
 #[test]

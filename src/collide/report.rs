@@ -1,5 +1,7 @@
 //! What one `resolve` of the collision stage did (metrics).
 
+use super::self_contact::SelfContactReport;
+
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct CollisionReport {
     /// Number of obstacle contacts (see `CollisionStage::contacts`).
@@ -16,6 +18,8 @@ pub struct CollisionReport {
     /// Cloth-cloth colliding pairs the fail-safe could not resolve (kinematic vertices involved,
     /// or the step started intersecting).
     pub unresolved: usize,
+    /// What cloth-cloth collision did (counts; zero without self-collision).
+    pub self_contact: SelfContactReport,
     /// Obstacles skipped because their swept bounds are far from the cloth's (see
     /// [`super::CollisionStage::set_culling`]).
     pub culled: usize,

@@ -112,6 +112,7 @@ impl CollisionStage {
                 h,
             );
             report.unresolved = out.unresolved;
+            report.self_contact = out.report;
             if self.settings.count_self_intersections {
                 report.self_intersections = Some(sc.count_intersections(x1));
             }

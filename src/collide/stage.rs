@@ -111,6 +111,15 @@ impl CollisionStage {
         self.culling = on;
     }
 
+    /// Seams being sewn: `seams[k]` pairs the vertices seam k pulls together. Until the stage is
+    /// replaced (the weld), self-contact skips every pair across a seam's neighbourhoods, so
+    /// repulsion does not hold the seam open. No effect without self-collision.
+    pub fn set_sewing_seams(&mut self, seams: &[Vec<(u32, u32)>], x: &[Vec3]) {
+        if let Some(sc) = self.self_collider.as_mut() {
+            sc.set_seams(seams, x, &self.thickness);
+        }
+    }
+
     pub fn settings(&self) -> &CollisionSettings {
         &self.settings
     }

@@ -190,6 +190,16 @@ pub fn dress(
         source: SharedStageError(std::sync::Arc::new(e)),
     };
     sim.replace_cloth(all, set).map_err(stage_error)?;
+    // Self-contact must not hold the seams open: their neighbourhoods are exempt until the weld
+    // (which replaces the stage).
+    let seam_pairs: Vec<Vec<(u32, u32)>> = parts
+        .iter()
+        .flat_map(|(_, seams, _)| seams.iter().map(|s| s.pairs.clone()))
+        .collect();
+    let x = sim.cloth.x.clone();
+    if let Some(stage) = sim.collision_mut() {
+        stage.set_sewing_seams(&seam_pairs, &x);
+    }
     let sewn: Vec<(&GarmentSpec, Vec<SeamPairs>)> =
         parts.iter().map(|(g, s, _)| (*g, s.clone())).collect();
     let results = sew(sim, &sewn)?;

@@ -9,6 +9,7 @@ use super::hanging::{
     stiff_implicit, tiny_cloth,
 };
 use super::motion::{crumple, impact, pinch, robot_swing};
+use super::self_contact::{cape_swinging, sleeve_worn, towel_picked, towel_shaken};
 use super::{Case, HardError, Resolution};
 
 /// Builds one case at a resolution.
@@ -32,5 +33,9 @@ pub fn catalogue() -> Vec<(&'static str, CaseFn)> {
         ("pinned_inside_obstacle", pinned_inside_obstacle),
         ("wind_50_m_s", wind),
         ("long_run_10_min", long_run),
+        ("self_towel_shaken_at_velocity_limits", towel_shaken),
+        ("self_cape_under_swinging_arms", cape_swinging),
+        ("self_sleeve_sewn_and_worn", sleeve_worn),
+        ("self_towel_picked_from_table", towel_picked),
     ]
 }

@@ -9,6 +9,7 @@ mod hanging;
 mod motion;
 mod report;
 mod runner;
+mod self_contact;
 mod setup;
 
 pub use cases::{catalogue, CaseFn};

@@ -1,7 +1,7 @@
 //! What one frame step did: the metrics every step reports, gathered from the solver's and
 //! the collision stage's reports of each substep.
 
-use crate::collide::CollisionReport;
+use crate::collide::{CollisionReport, SelfContactReport};
 use crate::integrate::StepReport;
 
 /// What one frame step did.
@@ -34,6 +34,8 @@ pub struct StepMetrics {
     pub collision_time_s: f64,
     /// Obstacles skipped by the collision stage as far from the cloth (last substep).
     pub culled_obstacles: usize,
+    /// Cloth-cloth counts summed over the substeps (largest zone: the largest seen).
+    pub self_contact: SelfContactReport,
 }
 
 impl StepMetrics {
@@ -59,5 +61,6 @@ impl StepMetrics {
         self.unresolved_contacts += r.unresolved;
         self.collision_time_s += r.time_s;
         self.culled_obstacles = r.culled;
+        self.self_contact.add(&r.self_contact);
     }
 }

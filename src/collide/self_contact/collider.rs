@@ -1,6 +1,8 @@
 //! The self-contact collider: the cloth's triangles, edges and 1-ring, the scratch buffers of
 //! the passes, and the stencils of its pairs.
 
+use super::report::SelfContactReport;
+use super::rest::RestShape;
 use super::stencil::Stencil;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
 
@@ -14,14 +16,20 @@ pub(crate) struct SelfCollider {
     pub(super) qboxes: Vec<Aabb>,
     pub(super) iboxes: Vec<Aabb>,
     pub(super) stamp: PairScratch,
-    /// Per-candidate CCD hit flags (vertex-triangle, edge-edge), reused.
-    pub(super) flags: (Vec<bool>, Vec<bool>),
+    /// Per-candidate flags of a pass (vertex-triangle, edge-edge), reused.
+    pub(super) flags: (Vec<u8>, Vec<u8>),
     pub(super) pairs: Vec<(u32, u32)>,
     pub(super) pairs_ee: Vec<(u32, u32)>,
     pub(super) w: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
     pub(super) in_zone: Vec<bool>,
+    /// The rest shape's neighbourhoods (built on the first `resolve`), for rest proximity.
+    pub(super) rest: Option<RestShape>,
+    /// Per vertex: bits of the seams being sewn near it (empty: none).
+    pub(super) seam_bits: Vec<u64>,
+    /// The counts of the current `resolve`.
+    pub(super) report: SelfContactReport,
 }
 
 pub(super) fn shares_vertex(a: &[u32], b: &[u32]) -> bool {
@@ -69,6 +77,9 @@ impl SelfCollider {
             parent: Vec::new(),
             zone_members: Vec::new(),
             in_zone: Vec::new(),
+            rest: None,
+            seam_bits: Vec::new(),
+            report: SelfContactReport::default(),
         }
     }
 

@@ -10,16 +10,21 @@
 //! vertices (w = 0) never move.
 //!
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
-//! `pairs` (broad phase), one query per file (`proximity`, `ccd`, `intersections`), `zones`
-//! (the impact-zone fail-safe), `resolve` (their order per detection mode).
+//! `pairs` (broad phase), `exempt` (pairs that are no contact: rest proximity, seams being
+//! sewn; `rest` holds the rest-close lists), one query per file (`proximity`, `ccd`, `intersections`), `zones` (the impact-zone
+//! fail-safe), `resolve` (their order per detection mode), `report` (its counts).
 
 mod ccd;
 mod collider;
+mod exempt;
 mod intersections;
 mod pairs;
 mod proximity;
+mod report;
 mod resolve;
+mod rest;
 mod stencil;
 mod zones;
 
 pub(crate) use collider::SelfCollider;
+pub use report::SelfContactReport;

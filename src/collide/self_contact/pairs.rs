@@ -2,19 +2,32 @@
 //! over swept boxes.
 
 use super::collider::{shares_vertex, SelfCollider};
+use super::exempt::across_seam;
+use super::rest::RestShape;
 use crate::collide::broad::{cell_size, collect_pairs, Aabb};
 use crate::Vec3;
 
 impl SelfCollider {
     /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
     /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
+    /// Pairs across a seam being sewn are never candidates; with `proximity`, neither are pairs
+    /// closer than their contact distance in the rest shape (see `exempt`). Without `with_edges`
+    /// no edge-edge pairs are collected.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn broad_phase(
         &mut self,
         xa: &[Vec3],
         xb: &[Vec3],
         margin: impl Fn(usize) -> f64,
         vertex_vertex: bool,
+        proximity: bool,
+        with_edges: bool,
     ) {
+        let none = RestShape::default();
+        let rest = match (&self.rest, proximity) {
+            (Some(r), true) => r,
+            _ => &none,
+        };
         // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
         // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
@@ -38,31 +51,46 @@ impl SelfCollider {
                 &q,
                 &it,
                 &mut stamp,
-                |a, b| a < b && !self.adjacent(a, b),
+                |a, b| {
+                    a < b
+                        && !self.adjacent(a, b)
+                        && !across_seam(&self.seam_bits, &[a], &[b])
+                        && !rest.vv.contains(a, b)
+                },
                 &mut pairs,
             );
             (self.qboxes, self.iboxes) = (q, it);
             self.pairs = pairs;
             self.stamp = stamp;
             self.pairs_ee.clear();
+            self.report.candidates += self.pairs.len();
             return;
         }
         let tris = &self.triangles;
+        let bits = &self.seam_bits;
         self.iboxes.clear();
         self.iboxes.extend(tris.iter().map(|t| {
             let [a, b, c] = t.map(|i| i as usize);
             Aabb::from_points(&[xa[a], xa[b], xa[c], xb[a], xb[b], xb[c]], 0.0)
         }));
-        let cell = cell_size(&self.iboxes, 0.0);
+        let cell = cell_size(&self.iboxes, 0.0).max(cell_size(&self.qboxes, 0.0));
         self.hash.build(cell, &self.iboxes);
         collect_pairs(
             &self.hash,
             &self.qboxes,
             &self.iboxes,
             &mut self.stamp,
-            |v, t| !tris[t as usize].contains(&v),
+            |v, t| {
+                let tri = &tris[t as usize];
+                !tri.contains(&v) && !across_seam(bits, &[v], tri) && !rest.vt.contains(v, t)
+            },
             &mut self.pairs,
         );
+        self.report.candidates += self.pairs.len();
+        if !with_edges {
+            self.pairs_ee.clear();
+            return;
+        }
         let edges = &self.edges;
         self.iboxes.clear();
         self.iboxes.extend(edges.iter().map(|e| {
@@ -78,15 +106,22 @@ impl SelfCollider {
                     hi: bx.hi + Vec3::splat(m),
                 }
             }));
-        let cell = cell_size(&self.iboxes, 0.0);
+        let cell = cell_size(&self.iboxes, 0.0).max(cell_size(&self.qboxes, 0.0));
         self.hash.build(cell, &self.iboxes);
         collect_pairs(
             &self.hash,
             &self.qboxes,
             &self.iboxes,
             &mut self.stamp,
-            |a, b| a < b && !shares_vertex(&edges[a as usize], &edges[b as usize]),
+            |a, b| {
+                let (ea, eb) = (&edges[a as usize], &edges[b as usize]);
+                a < b
+                    && !shares_vertex(ea, eb)
+                    && !across_seam(bits, ea, eb)
+                    && !rest.ee.contains(a, b)
+            },
             &mut self.pairs_ee,
         );
+        self.report.candidates += self.pairs_ee.len();
     }
 }

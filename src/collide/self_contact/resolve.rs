@@ -2,6 +2,7 @@
 //! then (continuous) bounded CCD passes and the impact-zone fail-safe.
 
 use super::collider::SelfCollider;
+use super::report::SelfContactReport;
 use crate::collide::settings::{CollisionSettings, DetectionMode};
 use crate::Vec3;
 
@@ -11,6 +12,7 @@ const CONTACT_MASS_FACTOR: f64 = 10.0;
 
 pub(crate) struct SelfOutcome {
     pub unresolved: usize,
+    pub report: SelfContactReport,
 }
 
 impl SelfCollider {
@@ -28,6 +30,11 @@ impl SelfCollider {
         h: f64,
     ) -> SelfOutcome {
         let n = x0.len().min(x1.len()).min(inv_mass.len());
+        self.report = SelfContactReport::default();
+        if self.rest.is_none() {
+            self.capture_rest(x0, thickness);
+        }
+        self.report.exempt = self.rest.as_ref().map_or(0, |r| r.pairs());
         self.w.clear();
         self.w.extend((0..n).map(|i| {
             if in_contact[i] {
@@ -40,25 +47,25 @@ impl SelfCollider {
         match settings.mode {
             DetectionMode::Spheres => {
                 for _ in 0..iters {
-                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, true) == 0 {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, true, false) == 0 {
                         break;
                     }
                 }
-                SelfOutcome { unresolved: 0 }
+                self.outcome(0)
             }
             DetectionMode::Proximity => {
                 for _ in 0..iters {
-                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, false) == 0 {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, false, true) == 0 {
                         break;
                     }
                 }
-                SelfOutcome { unresolved: 0 }
+                self.outcome(0)
             }
             DetectionMode::Continuous => {
-                self.repulsion_pass(x0, x1, v1, thickness, friction, h, false);
+                self.repulsion_pass(x0, x1, v1, thickness, friction, h, false, false);
                 let mut clean = false;
                 for _ in 0..iters {
-                    if self.ccd_pass(x0, x1, v1, thickness, h, true) == 0 {
+                    if self.ccd_pass(x0, x1, v1, thickness, true) == 0 {
                         clean = true;
                         break;
                     }
@@ -68,8 +75,15 @@ impl SelfCollider {
                 } else {
                     self.impact_zones(settings.zone_iterations, x0, x1, v1, thickness, h)
                 };
-                SelfOutcome { unresolved }
+                self.outcome(unresolved)
             }
+        }
+    }
+
+    fn outcome(&self, unresolved: usize) -> SelfOutcome {
+        SelfOutcome {
+            unresolved,
+            report: self.report,
         }
     }
 }

@@ -21,6 +21,42 @@ fn union(parent: &mut [u32], a: u32, b: u32) {
     }
 }
 
+/// The rigid motion `v = vc + omega x (x - xc)` that best fits weighted point velocities
+/// `(x, v, m)`: centre-of-mass velocity and the angular velocity `I^-1 L` of the momentum about
+/// the centre. Collinear sets have a singular inertia, regularised by a tiny fraction of its trace
+/// (the rotation about their line is then zero).
+fn rigid_fit(points: impl Iterator<Item = (Vec3, Vec3, f64)> + Clone) -> (Vec3, Vec3, Vec3) {
+    let mut m_tot = 0.0;
+    let mut xc = Vec3::ZERO;
+    let mut vc = Vec3::ZERO;
+    for (x, v, m) in points.clone() {
+        m_tot += m;
+        xc += x * m;
+        vc += v * m;
+    }
+    if m_tot <= 0.0 {
+        return (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+    }
+    xc /= m_tot;
+    vc /= m_tot;
+    let mut l = Vec3::ZERO;
+    let mut inertia = Mat3::ZERO;
+    for (x, v, m) in points {
+        let r = x - xc;
+        l += r.cross(v - vc) * m;
+        inertia +=
+            (Mat3::IDENTITY * r.length_squared() - Mat3::from_cols(r * r.x, r * r.y, r * r.z)) * m;
+    }
+    let tr = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
+    inertia += Mat3::IDENTITY * (1e-9 * tr + 1e-300);
+    let omega = if inertia.determinant().abs() > 0.0 {
+        inertia.inverse() * l
+    } else {
+        Vec3::ZERO
+    };
+    (vc, omega, xc)
+}
+
 impl SelfCollider {
     pub(super) fn merge(&mut self, st: &Stencil) {
         for k in 1..st.len {
@@ -44,13 +80,13 @@ impl SelfCollider {
         self.parent.clear();
         self.parent.extend(0..n as u32);
         for _ in 0..zone_iterations.max(1) {
-            if self.ccd_pass(x0, x1, v1, th, h, false) == 0 {
+            if self.ccd_pass(x0, x1, v1, th, false) == 0 {
                 return 0;
             }
             self.rigidify(x0, x1, v1, h);
         }
         // Last resort: vertices of zones stop at x0 (always intersection-free if x0 was).
-        if self.ccd_pass(x0, x1, v1, th, h, false) == 0 {
+        if self.ccd_pass(x0, x1, v1, th, false) == 0 {
             return 0;
         }
         self.mark_zones(n);
@@ -60,7 +96,7 @@ impl SelfCollider {
                 v1[i] = Vec3::ZERO;
             }
         }
-        let stuck = self.ccd_pass(x0, x1, v1, th, h, false);
+        let stuck = self.ccd_pass(x0, x1, v1, th, false);
         if stuck > 0 {
             log::warn!("self-collision fail-safe left {stuck} colliding pairs");
         }
@@ -104,6 +140,9 @@ impl SelfCollider {
             }
             self.zone_members[slot[r] as usize].push(i);
         }
+        self.report.zones = self.report.zones.max(roots.len());
+        let largest = self.zone_members[..roots.len()].iter().map(Vec::len).max();
+        self.report.largest_zone = self.report.largest_zone.max(largest.unwrap_or(0));
         let inv_h = if h > 0.0 { 1.0 / h } else { 0.0 };
         for z in 0..roots.len() {
             let members = &self.zone_members[z];
@@ -114,48 +153,27 @@ impl SelfCollider {
                 .filter(|&i| self.w[i] <= 0.0)
                 .collect();
             if !kinematic.is_empty() {
-                // Pinned vertices drive the zone: translate with their mean velocity.
-                let vk = kinematic.iter().map(|&i| vel(i)).sum::<Vec3>() / kinematic.len() as f64;
+                // Kinematic members have infinite mass: the zone moves rigidly with them, by the
+                // rigid motion that best fits their velocities (exact when they share one link or
+                // pin). Translating it with their mean velocity, as before, ignored the link's
+                // rotation and stretched the edges into the zone (robot_cape: 9.6x rest and
+                // 26 m/s where the shoulder's attached corner met the torso's).
+                let (vc, omega, xc) = rigid_fit(kinematic.iter().map(|&i| (x0[i], vel(i), 1.0)));
                 for &i in members {
                     let i = i as usize;
                     if self.w[i] > 0.0 {
-                        v1[i] = vk;
-                        x1[i] = x0[i] + vk * h;
+                        let v = vc + omega.cross(x0[i] - xc);
+                        v1[i] = v;
+                        x1[i] = x0[i] + v * h;
                     }
                 }
                 continue;
             }
-            let mut m_tot = 0.0;
-            let mut xc = Vec3::ZERO;
-            let mut vc = Vec3::ZERO;
-            for &i in members {
+            let fit = members.iter().map(|&i| {
                 let i = i as usize;
-                let m = 1.0 / self.w[i];
-                m_tot += m;
-                xc += x0[i] * m;
-                vc += vel(i) * m;
-            }
-            xc /= m_tot;
-            vc /= m_tot;
-            let mut l = Vec3::ZERO;
-            let mut inertia = Mat3::ZERO;
-            for &i in members {
-                let i = i as usize;
-                let m = 1.0 / self.w[i];
-                let r = x0[i] - xc;
-                l += r.cross(vel(i) - vc) * m;
-                inertia += (Mat3::IDENTITY * r.length_squared()
-                    - Mat3::from_cols(r * r.x, r * r.y, r * r.z))
-                    * m;
-            }
-            // Collinear zones have a singular inertia: regularise by a tiny fraction of its trace.
-            let tr = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
-            inertia += Mat3::IDENTITY * (1e-9 * tr + 1e-300);
-            let omega = if inertia.determinant().abs() > 0.0 {
-                inertia.inverse() * l
-            } else {
-                Vec3::ZERO
-            };
+                (x0[i], vel(i), 1.0 / self.w[i])
+            });
+            let (vc, omega, xc) = rigid_fit(fit);
             for &i in members {
                 let i = i as usize;
                 let v = vc + omega.cross(x0[i] - xc);

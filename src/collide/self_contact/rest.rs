@@ -1,0 +1,53 @@
+//! The rest shape's close pairs, as sorted lists per element (built by `exempt`, read by the
+//! broad phase).
+
+/// Sorted lists per element (CSR): `items[start[k]..start[k + 1]]`.
+#[derive(Default)]
+pub(super) struct Csr {
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Csr {
+    /// Appends the next element's row (sorted and deduplicated here; `row` is left empty).
+    pub fn push(&mut self, row: &mut Vec<u32>) {
+        if self.start.is_empty() {
+            self.start.push(0);
+        }
+        row.sort_unstable();
+        row.dedup();
+        self.items.extend_from_slice(row);
+        self.start.push(self.items.len() as u32);
+        row.clear();
+    }
+
+    pub fn contains(&self, k: u32, item: u32) -> bool {
+        match (self.start.get(k as usize), self.start.get(k as usize + 1)) {
+            (Some(&s), Some(&e)) => self.items[s as usize..e as usize]
+                .binary_search(&item)
+                .is_ok(),
+            _ => false,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+}
+
+/// The pairs that are closer than their contact distance in the rest shape (and near in the
+/// mesh), built from the first state the collider sees: per vertex its triangles and vertices,
+/// per edge its edges.
+#[derive(Default)]
+pub(super) struct RestShape {
+    pub vt: Csr,
+    pub vv: Csr,
+    pub ee: Csr,
+}
+
+impl RestShape {
+    /// Rest-close pairs: vertex-triangle plus edge-edge (each edge pair once).
+    pub fn pairs(&self) -> usize {
+        self.vt.len() + self.ee.len() / 2
+    }
+}
