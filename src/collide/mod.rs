@@ -38,6 +38,7 @@ pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};
 pub use report::CollisionReport;
+pub use resolve::{ContactKind, StageRollback};
 pub use settings::{CollisionSettings, DetectionMode, ResponseMode};
 pub use spec::{
     validate_obstacles, BuildError, CollisionSpec, MotionSpec, ObstacleSpec, PoseSpec, ShapeSpec,

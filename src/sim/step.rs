@@ -24,13 +24,20 @@
 use super::coupling::StartState;
 use super::energy::Energies;
 use super::error::{DivergenceError, Symptom};
-use super::guard::{self, DivergencePolicy, Sample};
+use super::fast;
+use super::guard::{self, Book, DivergencePolicy, Sample};
 use super::metrics::StepMetrics;
 use super::simulation::Simulation;
 use crate::integrate::Dynamics;
 use std::time::Instant;
 
 impl Simulation {
+    /// Switches the fast-contact splitting and the guard's strain check off or back on (on by
+    /// default): what they cost is measured against this (`benches/fast_links.rs`).
+    pub fn set_fast_contact(&mut self, on: bool) {
+        self.guard.fast_off = !on;
+    }
+
     /// Advances one frame (`settings.dt`).
     pub fn step(&mut self) -> Result<&StepMetrics, Box<DivergenceError>> {
         let wall = Instant::now();
@@ -69,7 +76,8 @@ impl Simulation {
         Ok(&self.last)
     }
 
-    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence.
+    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence, or
+    /// split up front where an obstacle outruns the cloth near it.
     fn substep(
         &mut self,
         t: f64,
@@ -83,29 +91,64 @@ impl Simulation {
             // Known to be unstable before trying: an explicit step over its limit is only caught
             // by the energy check once the unstable mode carries a visible share of the energy,
             // and that energy would stay in the cloth. Halve it up front instead.
+            m.subdivisions += 1;
             return self.halves(t, h, (s0, s1), depth, m);
         }
+        let obstacle_speed = match self.fast_contact(t, h, (s0, s1), depth) {
+            Err(()) => {
+                m.contact_splits += 1;
+                return self.halves(t, h, (s0, s1), depth, m);
+            }
+            Ok(speed) => speed,
+        };
+        let book = self.guard.book();
         self.kinematic_targets(h, s0, s1);
-        self.coupling_in(t);
+        self.coupling_in(t, h, (s0, s1));
         let e0 = self.guard.start_energies(&self.cloth, &self.model.effects);
         let external = self.external_forces(t);
         self.integrate(t, h, m);
         self.snap_kinematic(s1);
-        if let Err((vertex, symptom)) = self.check(t, h, e0, external) {
+        let external = self.moving_spring_work(external);
+        if let Err(failure) = self.check(t, h, e0, external) {
             self.roll_back(e0);
-            let g = self.settings.guard;
-            if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
-                return self.halves(t, h, (s0, s1), depth, m);
-            }
-            return Err(Box::new(self.divergence_error(t, h, vertex, symptom)));
+            return self.rejected(t, h, (s0, s1), depth, m, failure);
         }
+        let strained = self.guard_strain();
         if self.collision.is_some() {
+            if strained {
+                self.save_stage();
+            }
             self.move_obstacles(t, h, s1);
             self.coupling_out(t, h);
             self.collide(h, m);
         }
+        if strained {
+            if let Err(failure) = self.check_strain(obstacle_speed) {
+                self.roll_back_collided(book);
+                return self.rejected(t, h, (s0, s1), depth, m, failure);
+            }
+        }
         m.substeps += 1;
         Ok(())
+    }
+
+    /// A rejected substep (already rolled back): redone as halves when the policy allows, else
+    /// the error.
+    fn rejected(
+        &mut self,
+        t: f64,
+        h: f64,
+        (s0, s1): (f64, f64),
+        depth: u32,
+        m: &mut StepMetrics,
+        (vertex, symptom): (usize, Symptom),
+    ) -> Result<(), Box<DivergenceError>> {
+        let g = self.settings.guard;
+        if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
+            m.subdivisions += 1;
+            return self.halves(t, h, (s0, s1), depth, m);
+        }
+        Err(Box::new(self.divergence_error(t, h, vertex, symptom)))
     }
 
     /// The substep `(t, h)` over frame fractions `s0..s1` as two halves, one level deeper.
@@ -117,10 +160,45 @@ impl Simulation {
         depth: u32,
         m: &mut StepMetrics,
     ) -> Result<(), Box<DivergenceError>> {
-        m.subdivisions += 1;
         let sm = 0.5 * (s0 + s1);
         self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
         self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m)
+    }
+
+    /// Stage 0: whether a moving obstacle outruns the cloth near it over this substep (see
+    /// [`fast`]): `Err` asks for a split (within the guard's levels of halving), `Ok` gives the
+    /// fastest obstacle point's speed (m/s) for the strain bound. Static obstacles cost nothing.
+    fn fast_contact(
+        &mut self,
+        t: f64,
+        h: f64,
+        (s0, s1): (f64, f64),
+        depth: u32,
+    ) -> Result<f64, ()> {
+        let Some(stage) = self.collision.as_ref().filter(|_| !self.guard.fast_off) else {
+            return Ok(0.0);
+        };
+        let may_split = depth < self.settings.guard.max_subdivisions;
+        let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
+        let mut top: f64 = 0.0;
+        for (k, o) in stage.obstacles().iter().enumerate() {
+            let target = targets.get(k).and_then(Option::as_ref);
+            let poses = fast::substep_poses(o, target, (t, h), (s0, s1));
+            if poses.0 == poses.1 {
+                continue;
+            }
+            top = top.max(fast::top_speed(o, poses, h));
+            if !may_split {
+                continue;
+            }
+            let strain = self.guard.strain_model(cloth, &self.model.effects);
+            let th = cloth.thickness.iter().copied().fold(0.0, f64::max);
+            let pad = th + fast::REACH_RINGS * strain.max_spacing();
+            if fast::outruns(o, poses, cloth, h, pad, |i| strain.spacing(i)) {
+                return Err(());
+            }
+        }
+        Ok(top)
     }
 
     /// Whether the substep is over the integrator's stability limit (see
@@ -147,13 +225,28 @@ impl Simulation {
     }
 
     /// Stage 2: Coupling in: the last collision pass's contacts become this substep's constraints
-    /// (filter, friction, edge springs); see [`super::coupling`].
-    fn coupling_in(&mut self, t: f64) {
+    /// (filter, friction, edge springs; the edges of obstacles moving in this substep aimed at
+    /// where they will be at its end); see [`super::coupling`].
+    fn coupling_in(&mut self, t: f64, h: f64, (s0, s1): (f64, f64)) {
+        if let Some(stage) = self.collision.as_mut() {
+            let targets = &self.obstacle_targets;
+            let ends: Vec<Option<crate::Pose>> = (stage.obstacles().iter().enumerate())
+                .map(|(k, o)| {
+                    let target = targets.get(k).and_then(Option::as_ref);
+                    let (a, b) = fast::substep_poses(o, target, (t, h), (s0, s1));
+                    (a != b).then_some(b)
+                })
+                .collect();
+            if ends.iter().any(Option::is_some) {
+                stage.aim_feature_contacts(|k| ends.get(k).copied().flatten());
+            }
+        }
         let start = StartState {
             cloth: &self.cloth,
             effects: &self.model.effects,
             t,
             h_scene: self.settings.substep(),
+            h,
         };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
@@ -166,6 +259,30 @@ impl Simulation {
     fn external_forces(&mut self, t: f64) -> bool {
         let (fext, scratch) = (&mut self.work.fext, &mut self.work.scratch_f);
         guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
+    }
+
+    /// The work of springs on moving features (a link carrying the cloth) is work from outside:
+    /// their end forces join `work.fext` (zeroed first when `external` says it holds nothing).
+    /// Returns whether `work.fext` now holds external forces.
+    fn moving_spring_work(&mut self, external: bool) -> bool {
+        let moving = &self.coupling.moving_springs;
+        let forces = &self.work.report.contact_forces;
+        if moving.is_empty() || !self.model.caps.solves_contacts {
+            return external;
+        }
+        let fext = &mut self.work.fext;
+        if !external {
+            crate::linalg::scratch(fext, self.cloth.len());
+        }
+        for &k in moving {
+            let (Some(spring), Some(f)) =
+                (self.coupling.constraints.contacts.get(k), forces.get(k))
+            else {
+                continue;
+            };
+            spring.add_point_force(spring.normal * *f, 1.0, fext);
+        }
+        true
     }
 
     /// Stage 3: Integrate: the start state moves to the save buffers (a swap, not a copy) and the
@@ -312,5 +429,75 @@ impl Simulation {
         m.add_collision(&r);
         self.guard
             .collided(Energies::of(&self.cloth, &self.model.effects));
+    }
+
+    /// Whether the guard's strain check applies to this cloth (one with a collision stage; see
+    /// [`super::strain`]).
+    fn guard_strain(&mut self) -> bool {
+        !self.guard.fast_off
+            && self.collision.is_some()
+            && (self.guard)
+                .strain_model(&self.cloth, &self.model.effects)
+                .applies()
+    }
+
+    /// Before the collision pass, for a rejection after it: the stage's part of the start state
+    /// and the solved positions.
+    fn save_stage(&mut self) {
+        if let Some(stage) = &self.collision {
+            stage.save_into(&mut self.guard.stage_save);
+        }
+        self.guard.x_solved.clone_from(&self.cloth.x);
+    }
+
+    /// Stage 9: the guard's strain check of the state the substep ends in: an edge the collision
+    /// pass stretched beyond the bound of the material and the fastest impact of the run so far
+    /// (this substep's: the fastest start speed of the cloth plus `obstacle_speed`), from within
+    /// it after the solve (see [`super::strain`]). An edge the solve itself left beyond the bound
+    /// is the scene's doing (a kinematic link dragging pinned cloth stretches it without limit)
+    /// and the energy check's business.
+    fn check_strain(&mut self, obstacle_speed: f64) -> Result<(), (usize, Symptom)> {
+        let v_cloth = (self.work.v_save.iter())
+            .map(|v| v.length_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        let speed = self.guard.book().peak_speed.max(v_cloth + obstacle_speed);
+        self.guard.set_peak_speed(speed);
+        let (Some(strain), Some(stage)) = (self.guard.strain.as_ref(), self.collision.as_ref())
+        else {
+            return Ok(());
+        };
+        let bound = strain.bound(speed);
+        let solved = &self.guard.x_solved;
+        let Some(worst) = strain.grown_beyond(solved, &self.cloth.x, bound) else {
+            return Ok(());
+        };
+        let (a, b) = worst.vertices;
+        let moved = |i: usize| solved[i] != self.cloth.x[i];
+        let contact = (stage.contact_kind(a, moved(a))).or_else(|| stage.contact_kind(b, moved(b)));
+        let other = match self.cloth.piece_of(b) {
+            Some(p) => b - p.first_vertex,
+            None => b,
+        };
+        Err((
+            a,
+            Symptom::Stretch {
+                other,
+                ratio: worst.ratio,
+                bound,
+                contact,
+            },
+        ))
+    }
+
+    /// A substep rejected after its collision pass: the cloth, the guard's bookkeeping (`book`,
+    /// as the substep started) and the stage's poses and contacts go back to its start.
+    fn roll_back_collided(&mut self, book: Book) {
+        std::mem::swap(&mut self.cloth.x, &mut self.work.x_save);
+        std::mem::swap(&mut self.cloth.v, &mut self.work.v_save);
+        self.guard.set_book(book);
+        if let Some(stage) = self.collision.as_mut() {
+            stage.restore(&self.guard.stage_save);
+        }
     }
 }
