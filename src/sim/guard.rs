@@ -97,6 +97,10 @@ pub(super) struct Guard {
     /// The solved positions before the collision pass (to tell whether the solve or the response
     /// stretched an edge).
     pub x_solved: Vec<Vec3>,
+    /// Whether cloth was inside an obstacle when the strain check was set up and still is (`None`
+    /// until known): pushing it out stretches the cloth as far as the scene put it in, so the
+    /// check waits until it is out (the scene build reported it).
+    pub inside: Option<bool>,
     /// Fast-contact splitting and the strain check switched off (for the cost comparison of
     /// `benches/fast_links.rs`).
     pub fast_off: bool,
@@ -135,6 +139,7 @@ impl Guard {
         self.book.energy_budget = None;
         self.book.budget_scale = 0.0;
         self.strain = None;
+        self.inside = None;
     }
 
     /// The energy bookkeeping as it is now.

@@ -29,6 +29,7 @@ use super::guard::{self, Book, DivergencePolicy, Sample};
 use super::metrics::StepMetrics;
 use super::simulation::Simulation;
 use crate::integrate::Dynamics;
+use crate::Vec3;
 use std::time::Instant;
 
 impl Simulation {
@@ -108,7 +109,7 @@ impl Simulation {
         let external = self.external_forces(t);
         self.integrate(t, h, m);
         self.snap_kinematic(s1);
-        let external = self.moving_spring_work(external);
+        let external = self.moving_contact_work(external, h);
         if let Err(failure) = self.check(t, h, e0, external) {
             self.roll_back(e0);
             return self.rejected(t, h, (s0, s1), depth, m, failure);
@@ -261,26 +262,43 @@ impl Simulation {
         guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
     }
 
-    /// The work of springs on moving features (a link carrying the cloth) is work from outside:
-    /// their end forces join `work.fext` (zeroed first when `external` says it holds nothing).
-    /// Returns whether `work.fext` now holds external forces.
-    fn moving_spring_work(&mut self, external: bool) -> bool {
-        let moving = &self.coupling.moving_springs;
-        let forces = &self.work.report.contact_forces;
-        if moving.is_empty() || !self.model.caps.solves_contacts {
+    /// Moving obstacles do work on the cloth inside the solve: through the springs on their
+    /// features (a link carrying the cloth) and through the filter holding a vertex at a moving
+    /// surface's velocity (a ball pushing it). Both are work from outside: the springs' end
+    /// forces and the held vertices' constraint impulses over `h` join `work.fext` (zeroed first
+    /// when `external` says it holds nothing). Returns whether `work.fext` now holds external
+    /// forces. Nothing is added where nothing moves (bit for bit what the guard did before).
+    fn moving_contact_work(&mut self, external: bool, h: f64) -> bool {
+        let c = &self.coupling.constraints;
+        let springs = &self.coupling.moving_springs;
+        let report = &self.work.report;
+        let impulses = report.impulses();
+        let held_moving = |i: usize| {
+            !matches!(
+                c.filter[i],
+                crate::linalg::Filter::Free | crate::linalg::Filter::Fixed
+            ) && c.target_velocity[i] != Vec3::ZERO
+        };
+        let n = self.cloth.len();
+        let any_held = impulses.is_some() && (0..n).any(held_moving);
+        if !any_held && (springs.is_empty() || !self.model.caps.solves_contacts) {
             return external;
         }
         let fext = &mut self.work.fext;
         if !external {
-            crate::linalg::scratch(fext, self.cloth.len());
+            crate::linalg::scratch(fext, n);
         }
-        for &k in moving {
-            let (Some(spring), Some(f)) =
-                (self.coupling.constraints.contacts.get(k), forces.get(k))
-            else {
-                continue;
-            };
-            spring.add_point_force(spring.normal * *f, 1.0, fext);
+        if self.model.caps.solves_contacts {
+            for &k in springs {
+                if let (Some(spring), Some(f)) = (c.contacts.get(k), report.contact_forces.get(k)) {
+                    spring.add_point_force(spring.normal * *f, 1.0, fext);
+                }
+            }
+        }
+        if let Some(r) = impulses.filter(|_| any_held) {
+            for i in (0..n).filter(|&i| held_moving(i)) {
+                fext[i] += r[i] / h;
+            }
         }
         true
     }
@@ -455,7 +473,8 @@ impl Simulation {
     /// (this substep's: the fastest start speed of the cloth plus `obstacle_speed`), from within
     /// it after the solve (see [`super::strain`]). An edge the solve itself left beyond the bound
     /// is the scene's doing (a kinematic link dragging pinned cloth stretches it without limit)
-    /// and the energy check's business.
+    /// and the energy check's business; so is cloth the scene started inside an obstacle, until
+    /// it is out.
     fn check_strain(&mut self, obstacle_speed: f64) -> Result<(), (usize, Symptom)> {
         let v_cloth = (self.work.v_save.iter())
             .map(|v| v.length_squared())
@@ -463,8 +482,17 @@ impl Simulation {
             .sqrt();
         let speed = self.guard.book().peak_speed.max(v_cloth + obstacle_speed);
         self.guard.set_peak_speed(speed);
-        let (Some(strain), Some(stage)) = (self.guard.strain.as_ref(), self.collision.as_ref())
-        else {
+        let Some(stage) = self.collision.as_ref() else {
+            return Ok(());
+        };
+        let x_start = &self.work.x_save;
+        if *(self.guard.inside).get_or_insert_with(|| !stage.overlaps(x_start).is_empty()) {
+            if !stage.overlaps(&self.cloth.x).is_empty() {
+                return Ok(());
+            }
+            self.guard.inside = Some(false);
+        }
+        let Some(strain) = self.guard.strain.as_ref() else {
             return Ok(());
         };
         let bound = strain.bound(speed);
