@@ -7,7 +7,7 @@
 //! - **in** ([`Coupling::contacts_in`]): the last pass's obstacle contacts become the filter
 //!   `S = I - n n^T` of the vertices they press (a wedge's two or three normals together, see
 //!   [`HeldNormals`]), with the Coulomb friction of static surfaces when the integrator solves
-//!   it; static obstacles' edges and corners that touch the cloth between vertices become
+//!   it; obstacles' edges, corners and rod axes that touch the cloth between vertices become
 //!   one-sided springs when the integrator solves them.
 //! - **out** ([`Coupling::solved`], [`Coupling::feedback_out`]): the springs' end forces become
 //!   the next substep's friction limits; the filter's normal impulse on each held vertex
@@ -179,7 +179,8 @@ impl Coupling {
         }
     }
 
-    /// Static obstacle edges and corners the cloth touched in the last collision pass become
+    /// Obstacle edges and corners the cloth touched in the last collision pass (a moving one's
+    /// aimed at the end of this substep, without friction) become
     /// one-sided springs of this substep when the integrator solves them (see
     /// [`ContactSpring`]), with in-solve Coulomb friction whose limit is `mu` times the force
     /// the same contact's spring ended the last substep with, shared by weight. The stage then

@@ -2,6 +2,8 @@
 //!
 //! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way
 //! (each stage below is one named call, with its inputs and outputs in its doc):
+//! 0. a moving obstacle that would outrun the cloth near it splits the substep in two (see
+//!    [`super::fast`]);
 //! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
 //! 2. coupling in: the last collision pass's contacts become the solver's constraints;
 //! 3. effects give forces and the integrator advances the state (the start state is kept);
@@ -9,7 +11,9 @@
 //! 5. the guard checks the result (and subdivides or stops per policy);
 //! 6. obstacles move over the substep;
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
-//! 8. collisions fix the new state; metrics are recorded.
+//! 8. collisions fix the new state; metrics are recorded;
+//! 9. the guard checks the state the substep ends in for edges the collision response stretched
+//!    beyond the strain bound (and rolls the whole substep back per policy).
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
