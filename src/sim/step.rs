@@ -129,8 +129,13 @@ impl Simulation {
         }
         if strained {
             if let Err(failure) = self.check_strain(obstacle_speed) {
-                self.roll_back_collided(book);
-                return self.rejected(t, h, (s0, s1), depth, m, failure);
+                // Subdivide: halved while the guard may; at its deepest level the response cannot
+                // do better and the state is kept (its stretch is on /diagnostics). Stop: stop.
+                let g = self.settings.guard;
+                if g.policy == DivergencePolicy::Stop || depth < g.max_subdivisions {
+                    self.roll_back_collided(book);
+                    return self.rejected(t, h, (s0, s1), depth, m, failure);
+                }
             }
         }
         m.substeps += 1;
