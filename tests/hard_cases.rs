@@ -42,6 +42,7 @@ cases!(
     tiny_cloth,
     huge_cloth,
     impact_20_m_s,
+    fast_rod_20_m_s,
     robot_swing_at_velocity_limit,
     pinch_below_thickness,
     crumple_heap,

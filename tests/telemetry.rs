@@ -69,6 +69,7 @@ fn every_frame_has_its_telemetry_and_the_summary_matches() {
         for k in [
             "substeps",
             "subdivisions",
+            "contact_splits",
             "cg_iterations",
             "cg_residual_max",
             "contacts",

@@ -265,6 +265,11 @@ fn run(cli: Cli) -> Result<()> {
                 sim.settings.dt,
                 sim.settings.substeps
             );
+            if let Some(stage) = sim.collision() {
+                for o in stage.overlaps(&sim.cloth.x) {
+                    println!("  {o}");
+                }
+            }
             Ok(())
         }
     }

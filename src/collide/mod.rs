@@ -19,6 +19,7 @@ pub mod held;
 pub mod motion;
 pub mod narrow;
 pub mod obstacle;
+mod overlap;
 mod pinch;
 mod report;
 mod resolve;
@@ -37,7 +38,9 @@ pub use feedback::SolverFeedback;
 pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};
+pub use overlap::Overlap;
 pub use report::CollisionReport;
+pub use resolve::{ContactKind, StageRollback};
 pub use self_contact::SelfContactReport;
 pub use settings::{CollisionSettings, DetectionMode, ResponseMode};
 pub use spec::{

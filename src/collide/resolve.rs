@@ -2,13 +2,14 @@
 //! obstacles, pinches and wedges, obstacle features against cloth faces and edges (and the
 //! vertices they moved again), cloth against itself, then the penetration metric.
 
-use super::features::ClothState;
+use super::contact::Contact;
+use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
 use super::report::CollisionReport;
 use super::stage::CollisionStage;
 use super::wedge::separate_wedged;
-use crate::Vec3;
+use crate::{Pose, Vec3};
 use std::time::Instant;
 
 impl CollisionStage {
@@ -62,16 +63,23 @@ impl CollisionStage {
         let mut moved = std::mem::take(&mut self.feature_moved);
         moved.clear();
         moved.resize(n, false);
-        for ((o, f), _) in self
+        for (oi, ((o, f), _)) in self
             .obstacles
             .iter()
             .zip(&self.features)
             .zip(&self.near)
-            .filter(|(_, near)| **near)
+            .enumerate()
+            .filter(|(_, (_, near))| **near)
         {
-            report.feature_contacts +=
-                self.feature_collider
-                    .resolve(o, f, &state, &mut x1[..n], &mut v1[..n], &mut moved);
+            report.feature_contacts += self.feature_collider.resolve(
+                o,
+                oi,
+                f,
+                &state,
+                &mut x1[..n],
+                &mut v1[..n],
+                &mut moved,
+            );
             self.feature_contacts
                 .extend_from_slice(self.feature_collider.contacts());
         }
@@ -134,5 +142,83 @@ impl CollisionStage {
         report.deepest_penetration = deepest.max(0.0);
         report.time_s = start.elapsed().as_secs_f64();
         report
+    }
+}
+
+/// What a substep's collision pass changes in the stage besides the cloth (obstacle poses and
+/// the contacts fed forward to the next substep), saved so that a substep the guard rejects
+/// after the collision pass can be redone from its start (see [`CollisionStage::save_into`]).
+#[derive(Debug, Clone, Default)]
+pub struct StageRollback {
+    poses: Vec<(Pose, Pose)>,
+    contacts: Vec<Contact>,
+    feature_contacts: Vec<FeatureContact>,
+}
+
+/// Which of the stage's passes moved a cloth vertex in the last `resolve`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactKind {
+    /// An obstacle's face held the vertex (the vertex pass).
+    ObstacleVertex,
+    /// An obstacle's edge, corner or rod axis pushed a cloth face or edge (the feature pass).
+    Feature,
+    /// Cloth against cloth (the self-contact pass; only when it is on).
+    SelfContact,
+}
+
+impl std::fmt::Display for ContactKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ContactKind::ObstacleVertex => "obstacle contact (vertex against a face)",
+            ContactKind::Feature => "obstacle feature contact (an edge or rod between vertices)",
+            ContactKind::SelfContact => "self-contact",
+        })
+    }
+}
+
+impl CollisionStage {
+    /// Saves the obstacle poses and the fed-forward contacts into `s` (its buffers reused).
+    pub fn save_into(&self, s: &mut StageRollback) {
+        s.poses.clear();
+        s.poses
+            .extend(self.obstacles.iter().map(|o| (o.pose_prev, o.pose)));
+        s.contacts.clone_from(&self.contacts);
+        s.feature_contacts.clone_from(&self.feature_contacts);
+    }
+
+    /// Moves the feature contacts of obstacles that move in the coming substep to where their
+    /// features are at its end (`end_pose(k)`: obstacle `k`'s pose then, `None` when it does not
+    /// move), for the solver's springs.
+    pub fn aim_feature_contacts(&mut self, end_pose: impl Fn(usize) -> Option<Pose>) {
+        for c in self.feature_contacts.iter_mut() {
+            if let Some(pose) = end_pose(c.obstacle) {
+                c.end_point = pose.transform_point(c.local);
+                c.end_normal = (pose.rotation * c.local_normal).normalize();
+                c.moving = true;
+                c.mu = 0.0;
+            }
+        }
+    }
+
+    /// Puts back what [`Self::save_into`] saved.
+    pub fn restore(&mut self, s: &StageRollback) {
+        for (o, (a, b)) in self.obstacles.iter_mut().zip(&s.poses) {
+            (o.pose_prev, o.pose) = (*a, *b);
+        }
+        self.contacts.clone_from(&s.contacts);
+        self.feature_contacts.clone_from(&s.feature_contacts);
+    }
+
+    /// The pass of the last `resolve` that moved `vertex`, if one did (the feature pass first:
+    /// it runs between the vertex passes and its moves are the ones the vertex pass re-tests),
+    /// else self-contact when it is on and `moved` says the vertex moved.
+    pub fn contact_kind(&self, vertex: usize, moved: bool) -> Option<ContactKind> {
+        if self.feature_moved.get(vertex).copied().unwrap_or(false) {
+            return Some(ContactKind::Feature);
+        }
+        if self.contacts.iter().any(|c| c.vertex as usize == vertex) {
+            return Some(ContactKind::ObstacleVertex);
+        }
+        (moved && self.self_collider.is_some()).then_some(ContactKind::SelfContact)
     }
 }

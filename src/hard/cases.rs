@@ -4,6 +4,7 @@
 //! format cannot express, from a hand-made mesh. Bounds are derived in the comments next to them.
 
 use super::edge::{degenerate_mesh, long_run, pinned_inside_obstacle, wind};
+use super::fast_links::rod_through_sheet;
 use super::hanging::{
     heavy_cloth, huge_cloth, light_cloth, stiff_explicit_near_limit, stiff_explicit_over_limit,
     stiff_implicit, tiny_cloth,
@@ -26,6 +27,7 @@ pub fn catalogue() -> Vec<(&'static str, CaseFn)> {
         ("tiny_cloth", tiny_cloth),
         ("huge_cloth", huge_cloth),
         ("impact_20_m_s", impact),
+        ("fast_rod_20_m_s", rod_through_sheet),
         ("robot_swing_at_velocity_limit", robot_swing),
         ("pinch_below_thickness", pinch),
         ("crumple_heap", crumple),

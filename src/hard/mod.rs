@@ -5,6 +5,7 @@
 
 mod cases;
 mod edge;
+mod fast_links;
 mod hanging;
 mod motion;
 mod report;

@@ -23,6 +23,8 @@ pub struct FrameQuality {
     pub steps: u64,
     pub substeps: u64,
     pub subdivisions: u64,
+    /// Substeps split where a link moved fast relative to the cloth near it.
+    pub contact_splits: u64,
     pub cg_iterations: u64,
     /// Most CG iterations of one step.
     pub cg_iterations_max: u32,
@@ -47,6 +49,7 @@ impl FrameQuality {
         self.steps += 1;
         self.substeps += u64::from(m.substeps);
         self.subdivisions += u64::from(m.subdivisions);
+        self.contact_splits += u64::from(m.contact_splits);
         self.cg_iterations += u64::from(m.cg_iterations);
         self.cg_iterations_max = self.cg_iterations_max.max(m.cg_iterations);
         self.cg_residual_max = self.cg_residual_max.max(m.cg_residual_max);
@@ -92,6 +95,7 @@ impl FrameQuality {
             kv("steps", self.steps.to_string()),
             kv("substeps", self.substeps.to_string()),
             kv("subdivisions", self.subdivisions.to_string()),
+            kv("contact_splits", self.contact_splits.to_string()),
             kv("cg_iterations", self.cg_iterations.to_string()),
             kv("cg_iterations_max", self.cg_iterations_max.to_string()),
             kv("cg_residual_max", self.cg_residual_max.to_string()),

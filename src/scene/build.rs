@@ -120,6 +120,9 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
     };
     let mut sim = Simulation::new(cloth, effects, integrator, frames, settings);
     if let Some(stage) = collision {
+        for o in stage.overlaps(&sim.cloth.x) {
+            log::warn!("scene '{}': {o}", scene.name);
+        }
         sim.set_collision(stage);
     }
     if !scene.garments.is_empty() {

@@ -7,7 +7,7 @@
 //! - **in** ([`Coupling::contacts_in`]): the last pass's obstacle contacts become the filter
 //!   `S = I - n n^T` of the vertices they press (a wedge's two or three normals together, see
 //!   [`HeldNormals`]), with the Coulomb friction of static surfaces when the integrator solves
-//!   it; static obstacles' edges and corners that touch the cloth between vertices become
+//!   it; obstacles' edges, corners and rod axes that touch the cloth between vertices become
 //!   one-sided springs when the integrator solves them.
 //! - **out** ([`Coupling::solved`], [`Coupling::feedback_out`]): the springs' end forces become
 //!   the next substep's friction limits; the filter's normal impulse on each held vertex
@@ -45,6 +45,9 @@ pub(super) struct Coupling {
     spring_forces: Vec<([u32; 3], f64)>,
     /// What the solver did this substep, for the stage's `resolve`.
     pub feedback: SolverFeedback,
+    /// Indices into `constraints.contacts` of the springs on moving features: they do work on
+    /// the cloth, which the guard allows for.
+    pub moving_springs: Vec<usize>,
 }
 
 /// What the coupling reads at the start of a substep.
@@ -54,6 +57,8 @@ pub(super) struct StartState<'a> {
     pub t: f64,
     /// The scene's substep (not a subdivided one).
     pub h_scene: f64,
+    /// This substep.
+    pub h: f64,
 }
 
 impl Coupling {
@@ -174,7 +179,8 @@ impl Coupling {
         }
     }
 
-    /// Static obstacle edges and corners the cloth touched in the last collision pass become
+    /// Obstacle edges and corners the cloth touched in the last collision pass (a moving one's
+    /// aimed at the end of this substep, without friction) become
     /// one-sided springs of this substep when the integrator solves them (see
     /// [`ContactSpring`]), with in-solve Coulomb friction whose limit is `mu` times the force
     /// the same contact's spring ended the last substep with, shared by weight. The stage then
@@ -186,6 +192,7 @@ impl Coupling {
         caps: &Capabilities,
     ) {
         self.constraints.contacts.clear();
+        self.moving_springs.clear();
         if !caps.solves_contacts {
             return;
         }
@@ -214,7 +221,10 @@ impl Coupling {
                 stiffness: 0.0,
                 friction: 0.0,
             };
-            // `k h^2 / m` at the contact point's mass.
+            // `k h^2 / m` at the contact point's mass. A moving feature's spring is stiff for
+            // this substep (split where a link moves fast): it must carry the cloth with the
+            // link within the substep, not within a scene substep's time.
+            let h = if c.moving { s.h } else { h };
             let m: f64 = spring.slots().map(|(i, w)| w * mass[i]).sum();
             spring.stiffness = CONTACT_STIFFNESS * m / (h * h);
             let movable = spring.slots().any(|(i, _)| filter[i] != Filter::Fixed);
@@ -222,6 +232,8 @@ impl Coupling {
             // stopped) stays with the collision stage's pinch and push: as a spring it would
             // start with a large stored force (17 J released in one step, measured).
             let deep = spring.depth(&s.cloth.x) > (1.0 - FEATURE_DEEP) * c.gap;
+            // A moving feature holds the cloth where it will be at the substep's end.
+            (spring.point, spring.normal) = (c.end_point, c.end_normal);
             if !spring.is_valid(n) || !movable || deep {
                 continue;
             }
@@ -235,6 +247,9 @@ impl Coupling {
                 spring.friction = c.mu * normal_force;
             }
             sprung.push(c.verts);
+            if c.moving {
+                self.moving_springs.push(self.constraints.contacts.len());
+            }
             self.constraints.contacts.push(spring);
         }
         self.feedback.set_sprung(sprung);

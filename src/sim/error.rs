@@ -1,6 +1,7 @@
 //! The error of a simulation that diverged: what the guard measured, where, and (only when the
 //! integrator's stability bound says so) which effect is the cause.
 
+use crate::collide::ContactKind;
 use std::fmt;
 
 /// Why a substep was rejected: what the guard measured.
@@ -14,6 +15,17 @@ pub enum Symptom {
         gained: f64,
         allowed: f64,
     },
+    /// An edge (from the reported vertex to `other`, its index within the same piece) ended the
+    /// substep `ratio` times its rest length, beyond the `bound` the material and the speeds in
+    /// the scene allow, and the solve had left it within: the collision stage's response
+    /// stretched it (see the guard's strain check). `contact`: the contact kind that moved its
+    /// vertices (`None`: the stage's pass is not known).
+    Stretch {
+        other: usize,
+        ratio: f64,
+        bound: f64,
+        contact: Option<ContactKind>,
+    },
 }
 
 impl fmt::Display for Symptom {
@@ -26,6 +38,23 @@ impl fmt::Display for Symptom {
                 "is where energy runs away ({gained:.3e} J gained in one step, {allowed:.3e} J \
                  allowed)"
             ),
+            Symptom::Stretch {
+                other,
+                ratio,
+                bound,
+                contact,
+            } => {
+                write!(
+                    f,
+                    "ends an edge (to vertex {other}) stretched to {ratio:.3} times its rest \
+                     length, beyond the {bound:.3} the material and the speeds allow; the solve \
+                     left it within, the collision stage's "
+                )?;
+                match contact {
+                    Some(kind) => write!(f, "{kind} stretched it"),
+                    None => write!(f, "response stretched it"),
+                }
+            }
         }
     }
 }

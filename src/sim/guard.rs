@@ -14,7 +14,9 @@
 use super::energy::Energies;
 use super::error::{Cause, DivergenceError, Symptom};
 use super::scan::scan_vertices;
+use super::strain::StrainModel;
 use crate::cloth::Cloth;
+use crate::collide::StageRollback;
 use crate::effects::{EffectSet, State};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
@@ -83,9 +85,31 @@ pub(super) struct Accepted {
     pub speed2: f64,
 }
 
-/// The guard's bookkeeping across substeps.
-#[derive(Debug, Clone, Default)]
+/// The guard's bookkeeping across substeps, and what a rollback after the collision pass needs.
+#[derive(Debug, Default)]
 pub(super) struct Guard {
+    book: Book,
+    /// The strain check of the current cloth (`None` until set up).
+    pub strain: Option<StrainModel>,
+    /// The collision stage's part of the substep's start state, when the strain check may reject
+    /// the substep after the collision pass.
+    pub stage_save: StageRollback,
+    /// The solved positions before the collision pass (to tell whether the solve or the response
+    /// stretched an edge).
+    pub x_solved: Vec<Vec3>,
+    /// Whether cloth was inside an obstacle when the strain check was set up and still is (`None`
+    /// until known): pushing it out stretches the cloth as far as the scene put it in, so the
+    /// check waits until it is out (the scene build reported it).
+    pub inside: Option<bool>,
+    /// Fast-contact splitting and the strain check switched off (for the cost comparison of
+    /// `benches/fast_links.rs`).
+    pub fast_off: bool,
+}
+
+/// The energy bookkeeping (copied before a substep, put back when it is rejected after it was
+/// booked).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Book {
     /// Energy of the current state, if known (saves one evaluation per substep).
     energy_cache: Option<Energies>,
     /// Largest squared vertex speed of the current state when the guard's scan measured it
@@ -100,40 +124,71 @@ pub(super) struct Guard {
     /// Scale of the budget's slack: initial dynamic energy plus the allowances spent.
     budget_scale: f64,
     substep_count: usize,
+    /// The fastest impact speed of the run so far (m/s): the fastest cloth vertex plus the
+    /// fastest obstacle point of any substep. Strain a fast impact left can stay after it
+    /// (friction and contact hold it), so the strain bound uses the run's peak.
+    pub peak_speed: f64,
 }
 
 impl Guard {
-    /// A new phase (another cloth): the energy bookkeeping starts over.
+    /// A new phase (another cloth): the energy bookkeeping starts over, the strain check is set
+    /// up again.
     pub fn restart(&mut self) {
-        self.energy_cache = None;
-        self.recent_energy = [0.0; 16];
-        self.energy_budget = None;
-        self.budget_scale = 0.0;
+        self.book.energy_cache = None;
+        self.book.recent_energy = [0.0; 16];
+        self.book.energy_budget = None;
+        self.book.budget_scale = 0.0;
+        self.strain = None;
+        self.inside = None;
+    }
+
+    /// The energy bookkeeping as it is now.
+    pub fn book(&self) -> Book {
+        self.book
+    }
+
+    /// Puts back the bookkeeping of a substep's start (the substep was rejected after booking).
+    pub fn set_book(&mut self, b: Book) {
+        self.book = b;
+    }
+
+    /// The run's fastest impact speed is now `v` (m/s).
+    pub fn set_peak_speed(&mut self, v: f64) {
+        self.book.peak_speed = v;
+    }
+
+    /// The strain check for `cloth`, set up on first use and again when the cloth changed.
+    pub fn strain_model(&mut self, cloth: &Cloth, effects: &EffectSet) -> &StrainModel {
+        if !self.strain.as_ref().is_some_and(|s| s.fits(cloth)) {
+            self.strain = Some(StrainModel::of(cloth, effects));
+        }
+        self.strain
+            .get_or_insert_with(|| StrainModel::of(cloth, effects))
     }
 
     /// The cloth changed outside a step (vertices attached or released): its energy is unknown.
     pub fn forget_energy(&mut self) {
-        self.energy_cache = None;
+        self.book.energy_cache = None;
     }
 
     /// The energy of the current state, if known.
     pub fn energy(&self) -> Option<Energies> {
-        self.energy_cache
+        self.book.energy_cache
     }
 
     /// The largest squared speed of the current state, if the guard's scan measured it.
     pub fn scanned_speed2(&self) -> Option<f64> {
-        self.scanned_speed2
+        self.book.scanned_speed2
     }
 
     /// A new frame step begins.
     pub fn start_frame(&mut self) {
-        self.scanned_speed2 = None;
+        self.book.scanned_speed2 = None;
     }
 
     /// Energies at the start of a substep (the cached ones when known).
     pub fn start_energies(&self, cloth: &Cloth, effects: &EffectSet) -> Energies {
-        match self.energy_cache {
+        match self.book.energy_cache {
             Some(e) => e,
             None => Energies::of(cloth, effects),
         }
@@ -141,40 +196,41 @@ impl Guard {
 
     /// Kinetic energy `gained` (J) was given to the cloth from outside (released vertices).
     pub fn widen(&mut self, gained: f64) {
-        if let Some(b) = self.energy_budget.as_mut() {
+        if let Some(b) = self.book.energy_budget.as_mut() {
             *b += gained;
         }
-        self.budget_scale += gained;
-        self.energy_cache = None;
+        self.book.budget_scale += gained;
+        self.book.energy_cache = None;
     }
 
     /// Books an accepted substep that started at `e0`.
     pub fn accept(&mut self, e0: Energies, a: Accepted) {
         let (e0_total, e0_dynamic) = (e0.total(), e0.dynamic());
-        self.scanned_speed2 = Some(a.speed2);
-        if self.energy_budget.is_none() {
-            self.budget_scale = e0_dynamic;
+        self.book.scanned_speed2 = Some(a.speed2);
+        if self.book.energy_budget.is_none() {
+            self.book.budget_scale = e0_dynamic;
         }
-        self.energy_budget = Some(self.energy_budget.unwrap_or(e0_total) + a.spent);
-        self.budget_scale += a.spent;
-        self.energy_cache = Some(a.energies);
-        self.recent_energy[self.substep_count % 16] = a.energies.dynamic();
-        self.substep_count += 1;
+        self.book.energy_budget = Some(self.book.energy_budget.unwrap_or(e0_total) + a.spent);
+        self.book.budget_scale += a.spent;
+        self.book.energy_cache = Some(a.energies);
+        self.book.recent_energy[self.book.substep_count % 16] = a.energies.dynamic();
+        self.book.substep_count += 1;
     }
 
     /// The substep was rolled back to its start state of energy `e0`.
     pub fn reject(&mut self, e0: Energies) {
-        self.energy_cache = Some(e0);
+        self.book.energy_cache = Some(e0);
     }
 
     /// The collision stage changed the state to energy `after`: a moving obstacle can push
     /// energy into the cloth, so the budget widens by any gain.
     pub fn collided(&mut self, after: Energies) {
-        if let (Some(b), Some(budget)) = (self.energy_cache, self.energy_budget.as_mut()) {
+        if let (Some(b), Some(budget)) = (self.book.energy_cache, self.book.energy_budget.as_mut())
+        {
             *budget += (after.total() - b.total()).max(0.0);
         }
-        self.energy_cache = Some(after);
-        self.scanned_speed2 = None;
+        self.book.energy_cache = Some(after);
+        self.book.scanned_speed2 = None;
     }
 
     /// Checks the integrator's output; returns the new energies or the first bad vertex.
@@ -245,16 +301,20 @@ impl Guard {
         let gravity = s.effects.gravity().length();
         let gravity_error = h * gravity * mass_speed;
         let floor = 1e-12 * (1.0 + scan.mass);
-        let reference = self.recent_energy.iter().fold(e0_dynamic, |a, &b| a.max(b));
+        let reference = self
+            .book
+            .recent_energy
+            .iter()
+            .fold(e0_dynamic, |a, &b| a.max(b));
         let allowed = work + g.energy_growth * reference + gravity_error + floor;
         let gained = e1_total - e0_total;
         if gained > allowed {
             return Err((fastest(), Symptom::EnergyGain { gained, allowed }));
         }
         let spent = work + gravity_error + floor;
-        let budget = self.energy_budget.unwrap_or(e0_total) + spent;
-        let scale = if self.energy_budget.is_some() {
-            self.budget_scale
+        let budget = self.book.energy_budget.unwrap_or(e0_total) + spent;
+        let scale = if self.book.energy_budget.is_some() {
+            self.book.budget_scale
         } else {
             e0_dynamic
         } + spent;

@@ -11,6 +11,9 @@ pub struct StepMetrics {
     pub substeps: u32,
     /// Substeps that were redone as smaller steps by the divergence guard.
     pub subdivisions: u32,
+    /// Substeps split in two because an obstacle moved fast relative to the cloth near it (see
+    /// `sim::fast`): the contact is resolved in steps the collision stage can follow.
+    pub contact_splits: u32,
     pub force_evaluations: u32,
     pub cg_iterations: u32,
     pub cg_residual_max: f64,

@@ -7,6 +7,7 @@
 mod coupling;
 mod energy;
 mod error;
+mod fast;
 mod frames;
 mod guard;
 mod metrics;
@@ -14,6 +15,7 @@ mod model;
 mod scan;
 mod simulation;
 mod step;
+mod strain;
 
 pub use error::{Cause, DivergenceError, Symptom};
 pub use frames::{FrameScript, Frames};

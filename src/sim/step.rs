@@ -2,6 +2,8 @@
 //!
 //! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way
 //! (each stage below is one named call, with its inputs and outputs in its doc):
+//! 0. a moving obstacle that would outrun the cloth near it splits the substep in two (see
+//!    [`super::fast`]);
 //! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
 //! 2. coupling in: the last collision pass's contacts become the solver's constraints;
 //! 3. effects give forces and the integrator advances the state (the start state is kept);
@@ -9,7 +11,9 @@
 //! 5. the guard checks the result (and subdivides or stops per policy);
 //! 6. obstacles move over the substep;
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
-//! 8. collisions fix the new state; metrics are recorded.
+//! 8. collisions fix the new state; metrics are recorded;
+//! 9. the guard checks the state the substep ends in for edges the collision response stretched
+//!    beyond the strain bound (and rolls the whole substep back per policy).
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
@@ -24,13 +28,21 @@
 use super::coupling::StartState;
 use super::energy::Energies;
 use super::error::{DivergenceError, Symptom};
-use super::guard::{self, DivergencePolicy, Sample};
+use super::fast;
+use super::guard::{self, Book, DivergencePolicy, Sample};
 use super::metrics::StepMetrics;
 use super::simulation::Simulation;
 use crate::integrate::Dynamics;
+use crate::Vec3;
 use std::time::Instant;
 
 impl Simulation {
+    /// Switches the fast-contact splitting and the guard's strain check off or back on (on by
+    /// default): what they cost is measured against this (`benches/fast_links.rs`).
+    pub fn set_fast_contact(&mut self, on: bool) {
+        self.guard.fast_off = !on;
+    }
+
     /// Advances one frame (`settings.dt`).
     pub fn step(&mut self) -> Result<&StepMetrics, Box<DivergenceError>> {
         let wall = Instant::now();
@@ -69,7 +81,8 @@ impl Simulation {
         Ok(&self.last)
     }
 
-    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence.
+    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence, or
+    /// split up front where an obstacle outruns the cloth near it.
     fn substep(
         &mut self,
         t: f64,
@@ -83,29 +96,69 @@ impl Simulation {
             // Known to be unstable before trying: an explicit step over its limit is only caught
             // by the energy check once the unstable mode carries a visible share of the energy,
             // and that energy would stay in the cloth. Halve it up front instead.
+            m.subdivisions += 1;
             return self.halves(t, h, (s0, s1), depth, m);
         }
+        let obstacle_speed = match self.fast_contact(t, h, (s0, s1), depth) {
+            Err(()) => {
+                m.contact_splits += 1;
+                return self.halves(t, h, (s0, s1), depth, m);
+            }
+            Ok(speed) => speed,
+        };
+        let book = self.guard.book();
         self.kinematic_targets(h, s0, s1);
-        self.coupling_in(t);
+        self.coupling_in(t, h, (s0, s1));
         let e0 = self.guard.start_energies(&self.cloth, &self.model.effects);
         let external = self.external_forces(t);
         self.integrate(t, h, m);
         self.snap_kinematic(s1);
-        if let Err((vertex, symptom)) = self.check(t, h, e0, external) {
+        let external = self.moving_contact_work(external, h);
+        if let Err(failure) = self.check(t, h, e0, external) {
             self.roll_back(e0);
-            let g = self.settings.guard;
-            if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
-                return self.halves(t, h, (s0, s1), depth, m);
-            }
-            return Err(Box::new(self.divergence_error(t, h, vertex, symptom)));
+            return self.rejected(t, h, (s0, s1), depth, m, failure);
         }
+        let strained = self.guard_strain();
         if self.collision.is_some() {
+            if strained {
+                self.save_stage();
+            }
             self.move_obstacles(t, h, s1);
             self.coupling_out(t, h);
             self.collide(h, m);
         }
+        if strained {
+            if let Err(failure) = self.check_strain(obstacle_speed) {
+                // Subdivide: halved while the guard may; at its deepest level the response cannot
+                // do better and the state is kept (its stretch is on /diagnostics). Stop: stop.
+                let g = self.settings.guard;
+                if g.policy == DivergencePolicy::Stop || depth < g.max_subdivisions {
+                    self.roll_back_collided(book);
+                    return self.rejected(t, h, (s0, s1), depth, m, failure);
+                }
+            }
+        }
         m.substeps += 1;
         Ok(())
+    }
+
+    /// A rejected substep (already rolled back): redone as halves when the policy allows, else
+    /// the error.
+    fn rejected(
+        &mut self,
+        t: f64,
+        h: f64,
+        (s0, s1): (f64, f64),
+        depth: u32,
+        m: &mut StepMetrics,
+        (vertex, symptom): (usize, Symptom),
+    ) -> Result<(), Box<DivergenceError>> {
+        let g = self.settings.guard;
+        if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
+            m.subdivisions += 1;
+            return self.halves(t, h, (s0, s1), depth, m);
+        }
+        Err(Box::new(self.divergence_error(t, h, vertex, symptom)))
     }
 
     /// The substep `(t, h)` over frame fractions `s0..s1` as two halves, one level deeper.
@@ -117,10 +170,45 @@ impl Simulation {
         depth: u32,
         m: &mut StepMetrics,
     ) -> Result<(), Box<DivergenceError>> {
-        m.subdivisions += 1;
         let sm = 0.5 * (s0 + s1);
         self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
         self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m)
+    }
+
+    /// Stage 0: whether a moving obstacle outruns the cloth near it over this substep (see
+    /// [`fast`]): `Err` asks for a split (within the guard's levels of halving), `Ok` gives the
+    /// fastest obstacle point's speed (m/s) for the strain bound. Static obstacles cost nothing.
+    fn fast_contact(
+        &mut self,
+        t: f64,
+        h: f64,
+        (s0, s1): (f64, f64),
+        depth: u32,
+    ) -> Result<f64, ()> {
+        let Some(stage) = self.collision.as_ref().filter(|_| !self.guard.fast_off) else {
+            return Ok(0.0);
+        };
+        let may_split = depth < self.settings.guard.max_subdivisions;
+        let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
+        let mut top: f64 = 0.0;
+        for (k, o) in stage.obstacles().iter().enumerate() {
+            let target = targets.get(k).and_then(Option::as_ref);
+            let poses = fast::substep_poses(o, target, (t, h), (s0, s1));
+            if poses.0 == poses.1 {
+                continue;
+            }
+            top = top.max(fast::top_speed(o, poses, h));
+            if !may_split {
+                continue;
+            }
+            let strain = self.guard.strain_model(cloth, &self.model.effects);
+            let th = cloth.thickness.iter().copied().fold(0.0, f64::max);
+            let pad = th + fast::REACH_RINGS * strain.max_spacing();
+            if fast::outruns(o, poses, cloth, h, pad, |i| strain.spacing(i)) {
+                return Err(());
+            }
+        }
+        Ok(top)
     }
 
     /// Whether the substep is over the integrator's stability limit (see
@@ -147,13 +235,28 @@ impl Simulation {
     }
 
     /// Stage 2: Coupling in: the last collision pass's contacts become this substep's constraints
-    /// (filter, friction, edge springs); see [`super::coupling`].
-    fn coupling_in(&mut self, t: f64) {
+    /// (filter, friction, edge springs; the edges of obstacles moving in this substep aimed at
+    /// where they will be at its end); see [`super::coupling`].
+    fn coupling_in(&mut self, t: f64, h: f64, (s0, s1): (f64, f64)) {
+        if let Some(stage) = self.collision.as_mut() {
+            let targets = &self.obstacle_targets;
+            let ends: Vec<Option<crate::Pose>> = (stage.obstacles().iter().enumerate())
+                .map(|(k, o)| {
+                    let target = targets.get(k).and_then(Option::as_ref);
+                    let (a, b) = fast::substep_poses(o, target, (t, h), (s0, s1));
+                    (a != b).then_some(b)
+                })
+                .collect();
+            if ends.iter().any(Option::is_some) {
+                stage.aim_feature_contacts(|k| ends.get(k).copied().flatten());
+            }
+        }
         let start = StartState {
             cloth: &self.cloth,
             effects: &self.model.effects,
             t,
             h_scene: self.settings.substep(),
+            h,
         };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
@@ -166,6 +269,47 @@ impl Simulation {
     fn external_forces(&mut self, t: f64) -> bool {
         let (fext, scratch) = (&mut self.work.fext, &mut self.work.scratch_f);
         guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
+    }
+
+    /// Moving obstacles do work on the cloth inside the solve: through the springs on their
+    /// features (a link carrying the cloth) and through the filter holding a vertex at a moving
+    /// surface's velocity (a ball pushing it). Both are work from outside: the springs' end
+    /// forces and the held vertices' constraint impulses over `h` join `work.fext` (zeroed first
+    /// when `external` says it holds nothing). Returns whether `work.fext` now holds external
+    /// forces. Nothing is added where nothing moves (bit for bit what the guard did before).
+    fn moving_contact_work(&mut self, external: bool, h: f64) -> bool {
+        let c = &self.coupling.constraints;
+        let springs = &self.coupling.moving_springs;
+        let report = &self.work.report;
+        let impulses = report.impulses();
+        let held_moving = |i: usize| {
+            !matches!(
+                c.filter[i],
+                crate::linalg::Filter::Free | crate::linalg::Filter::Fixed
+            ) && c.target_velocity[i] != Vec3::ZERO
+        };
+        let n = self.cloth.len();
+        let any_held = impulses.is_some() && (0..n).any(held_moving);
+        if !any_held && (springs.is_empty() || !self.model.caps.solves_contacts) {
+            return external;
+        }
+        let fext = &mut self.work.fext;
+        if !external {
+            crate::linalg::scratch(fext, n);
+        }
+        if self.model.caps.solves_contacts {
+            for &k in springs {
+                if let (Some(spring), Some(f)) = (c.contacts.get(k), report.contact_forces.get(k)) {
+                    spring.add_point_force(spring.normal * *f, 1.0, fext);
+                }
+            }
+        }
+        if let Some(r) = impulses.filter(|_| any_held) {
+            for i in (0..n).filter(|&i| held_moving(i)) {
+                fext[i] += r[i] / h;
+            }
+        }
+        true
     }
 
     /// Stage 3: Integrate: the start state moves to the save buffers (a swap, not a copy) and the
@@ -312,5 +456,85 @@ impl Simulation {
         m.add_collision(&r);
         self.guard
             .collided(Energies::of(&self.cloth, &self.model.effects));
+    }
+
+    /// Whether the guard's strain check applies to this cloth (one with a collision stage; see
+    /// [`super::strain`]).
+    fn guard_strain(&mut self) -> bool {
+        !self.guard.fast_off
+            && self.collision.is_some()
+            && (self.guard)
+                .strain_model(&self.cloth, &self.model.effects)
+                .applies()
+    }
+
+    /// Before the collision pass, for a rejection after it: the stage's part of the start state
+    /// and the solved positions.
+    fn save_stage(&mut self) {
+        if let Some(stage) = &self.collision {
+            stage.save_into(&mut self.guard.stage_save);
+        }
+        self.guard.x_solved.clone_from(&self.cloth.x);
+    }
+
+    /// Stage 9: the guard's strain check of the state the substep ends in: an edge the collision
+    /// pass stretched beyond the bound of the material and the fastest impact of the run so far
+    /// (this substep's: the fastest start speed of the cloth plus `obstacle_speed`), from within
+    /// it after the solve (see [`super::strain`]). An edge the solve itself left beyond the bound
+    /// is the scene's doing (a kinematic link dragging pinned cloth stretches it without limit)
+    /// and the energy check's business; so is cloth the scene started inside an obstacle, until
+    /// it is out.
+    fn check_strain(&mut self, obstacle_speed: f64) -> Result<(), (usize, Symptom)> {
+        let v_cloth = (self.work.v_save.iter())
+            .map(|v| v.length_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        let speed = self.guard.book().peak_speed.max(v_cloth + obstacle_speed);
+        self.guard.set_peak_speed(speed);
+        let Some(stage) = self.collision.as_ref() else {
+            return Ok(());
+        };
+        let x_start = &self.work.x_save;
+        if *(self.guard.inside).get_or_insert_with(|| !stage.overlaps(x_start).is_empty()) {
+            if !stage.overlaps(&self.cloth.x).is_empty() {
+                return Ok(());
+            }
+            self.guard.inside = Some(false);
+        }
+        let Some(strain) = self.guard.strain.as_ref() else {
+            return Ok(());
+        };
+        let bound = strain.bound(speed);
+        let solved = &self.guard.x_solved;
+        let Some(worst) = strain.grown_beyond(solved, &self.cloth.x, bound) else {
+            return Ok(());
+        };
+        let (a, b) = worst.vertices;
+        let moved = |i: usize| solved[i] != self.cloth.x[i];
+        let contact = (stage.contact_kind(a, moved(a))).or_else(|| stage.contact_kind(b, moved(b)));
+        let other = match self.cloth.piece_of(b) {
+            Some(p) => b - p.first_vertex,
+            None => b,
+        };
+        Err((
+            a,
+            Symptom::Stretch {
+                other,
+                ratio: worst.ratio,
+                bound,
+                contact,
+            },
+        ))
+    }
+
+    /// A substep rejected after its collision pass: the cloth, the guard's bookkeeping (`book`,
+    /// as the substep started) and the stage's poses and contacts go back to its start.
+    fn roll_back_collided(&mut self, book: Book) {
+        std::mem::swap(&mut self.cloth.x, &mut self.work.x_save);
+        std::mem::swap(&mut self.cloth.v, &mut self.work.v_save);
+        self.guard.set_book(book);
+        if let Some(stage) = self.collision.as_mut() {
+            stage.restore(&self.guard.stage_save);
+        }
     }
 }

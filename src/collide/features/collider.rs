@@ -35,7 +35,7 @@ pub(crate) struct FeatureCollider {
     dirty: Vec<bool>,
     /// Vertices moved by the current pass.
     moved: Vec<bool>,
-    /// Contacts of the last `resolve` with static obstacles.
+    /// Contacts of the last `resolve`.
     contacts: Vec<FeatureContact>,
 }
 
@@ -67,11 +67,13 @@ impl FeatureCollider {
         }
     }
 
-    /// Detects and answers feature contacts of obstacle `o` over the step, updating `x1`, `v1`.
+    /// Detects and answers feature contacts of obstacle `o` (index `obstacle`) over the step, updating `x1`, `v1`.
     /// Marks every moved vertex in `touched`. Returns the number of contacts answered.
+    #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &mut self,
         o: &Obstacle,
+        obstacle: usize,
         f: &Features,
         s: &ClothState,
         x1: &mut [Vec3],
@@ -94,6 +96,7 @@ impl FeatureCollider {
             for hit in &self.hits {
                 let r = respond(
                     o,
+                    obstacle,
                     f.radius,
                     hit,
                     s,
@@ -115,7 +118,7 @@ impl FeatureCollider {
         answered
     }
 
-    /// The last `resolve`'s contacts with static obstacles (one per cloth face or edge and
+    /// The last `resolve`'s contacts (one per cloth face or edge and
     /// feature; earlier passes first).
     pub fn contacts(&self) -> &[FeatureContact] {
         &self.contacts

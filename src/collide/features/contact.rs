@@ -30,9 +30,12 @@ pub(crate) struct ClothState<'a> {
     pub sprung: &'a [[u32; 3]],
 }
 
-/// A contact of a static obstacle's edge or corner with the cloth, for the implicit solver to
-/// hold as a one-sided spring next substep (see [`crate::integrate::ContactSpring`]): the cloth
-/// point `sum weights_k x_k` stays `gap` in front of `point` along `normal`.
+/// A contact of an obstacle's edge, corner or rod axis with the cloth, for the implicit solver
+/// to hold as a one-sided spring next substep (see [`crate::integrate::ContactSpring`]): the
+/// cloth point `sum weights_k x_k` stays `gap` in front of `point` along `normal`. For a moving
+/// obstacle the feature moves on during that substep: `end_point` and `end_normal` are where
+/// it is at the substep's end (set by [`crate::collide::CollisionStage::aim_feature_contacts`];
+/// equal to `point` and `normal` for a static one).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FeatureContact {
     pub verts: [u32; 3],
@@ -43,7 +46,19 @@ pub struct FeatureContact {
     pub point: Vec3,
     /// Contact distance `radius + thickness` (m).
     pub gap: f64,
+    /// Coulomb coefficient of the solver's friction (0 for a moving obstacle: its friction
+    /// does work and stays with the collision stage).
     pub mu: f64,
+    /// Index of the obstacle in the stage.
+    pub obstacle: usize,
+    /// Whether the obstacle moved over the substep the contact was found in.
+    pub moving: bool,
+    /// `point` and `normal` in the obstacle's frame.
+    pub local: Vec3,
+    pub local_normal: Vec3,
+    /// Where the feature point and normal are at the end of the substep the spring acts in.
+    pub end_point: Vec3,
+    pub end_normal: Vec3,
 }
 
 /// A contact the solver held as a spring is answered here only once the cloth point is deeper

@@ -11,8 +11,10 @@ use crate::Vec3;
 const PUSH_SLACK: f64 = 1e-3;
 
 /// Answers one contact. `None` when it cannot move (all kinematic), else whether positions moved.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn respond(
     o: &Obstacle,
+    obstacle: usize,
     radius: f64,
     hit: &Hit,
     s: &ClothState,
@@ -41,18 +43,26 @@ pub(super) fn respond(
     let mu = o
         .friction
         .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
-    if o.pose_prev == o.pose {
-        contacts.push(FeatureContact {
-            verts: hit.verts,
-            weights: hit.w,
-            normal: n,
-            point: f_end,
-            gap: eta,
-            mu,
-        });
-        if s.sprung.binary_search(&hit.verts).is_ok() && gap >= DEEP * eta {
-            return Some(false);
-        }
+    // Every feature contact is handed to the solver (a moving obstacle's too: answered only
+    // here, by position after the solve, the cloth it carries lagged a whole substep of its
+    // motion behind it every substep, and that push was a strain the solver never saw).
+    let moving = o.pose_prev != o.pose;
+    contacts.push(FeatureContact {
+        verts: hit.verts,
+        weights: hit.w,
+        normal: n,
+        point: f_end,
+        gap: eta,
+        mu: if moving { 0.0 } else { mu },
+        obstacle,
+        moving,
+        local: hit.local,
+        local_normal: o.pose.rotation.inverse() * n,
+        end_point: f_end,
+        end_normal: n,
+    });
+    if s.sprung.binary_search(&hit.verts).is_ok() && gap >= DEEP * eta {
+        return Some(false);
     }
     let target = eta * (1.0 + PUSH_SLACK);
     let mut moved = false;

@@ -248,6 +248,11 @@ impl Obstacle {
         self
     }
 
+    /// The shape's local bounding box (infinite for a plane).
+    pub(crate) fn local_bounds(&self) -> (Vec3, Vec3) {
+        (self.local_min, self.local_max)
+    }
+
     /// World AABB of the shape swept from `pose_prev` to `pose` (corners of the local box at both
     /// poses; a rotation in between can bulge past it, so `margin` should cover that).
     pub(crate) fn swept_aabb(&self, margin: f64) -> (Vec3, Vec3) {

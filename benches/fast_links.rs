@@ -1,0 +1,111 @@
+//! What fast-contact splitting and the guard's strain check cost (issue 18), as ratios measured
+//! in one run:
+//!
+//! - the bundled scenes with both on over both off (`Simulation::set_fast_contact`): they should
+//!   cost nothing where nothing moves fast (the split count is printed, exact);
+//! - the issue's scene (1 m sheet, 40 x 40 vertices, free, implicit at 60 Hz, a 5 mm capsule at
+//!   the sheet's middle height) with the rod at 20 m/s over the same scene with the rod at rest:
+//!   at most 10x.
+//!
+//! `cargo bench --bench fast_links` prints one line per scene: ms per frame (best of the
+//! repeats), the ratio and the substeps and splits per frame.
+
+use drape::robot::RobotDriver;
+use drape::scene::Scene;
+use drape::sim::Simulation;
+use std::path::Path;
+use std::time::Instant;
+
+const REPEATS: usize = 3;
+
+fn bundled(name: &str) -> (Simulation, Option<RobotDriver>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config")
+        .join(name);
+    let s = Scene::load(&path).expect("bundled scene");
+    s.build_with_robot().expect("valid scene")
+}
+
+fn rod(speed: f64) -> (Simulation, Option<RobotDriver>) {
+    let yaml = format!(
+        r#"
+name: fast_link
+duration: 1.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.016666666666666666 }}
+cloths:
+  - name: sheet
+    grid: {{ size: [1.0, 1.0], resolution: [40, 40], pose: {{ xyz: [0.0, 0.0, 1.0], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
+    material: {{ density: 0.2, stretch: 1000.0, shear: 100.0, bend_warp: 1.0e-5, bend_weft: 1.0e-5, thickness: 0.004 }}
+obstacles:
+  - name: rod
+    shape: {{ type: capsule, radius: 0.005, half_height: 0.8 }}
+    pose: {{ xyz: [0.0, -0.05, 1.0], rpy: [0.0, 0.0, 1.5707963267948966] }}
+    motion: {{ type: velocity, linear: [0.0, {speed}, 0.0], angular: [0.0, 0.0, 0.0] }}
+collision: {{ mode: continuous }}
+"#
+    );
+    let s = Scene::from_yaml(&yaml, "fast_link").expect("valid scene");
+    s.build_with_robot().expect("valid scene")
+}
+
+/// Best wall time per frame (ms) over the repeats, and substeps and splits per frame.
+fn time(
+    build: &dyn Fn() -> (Simulation, Option<RobotDriver>),
+    frames: usize,
+    fast: bool,
+) -> (f64, f64, f64) {
+    let mut best = f64::INFINITY;
+    let (mut substeps, mut splits) = (0u64, 0u64);
+    for _ in 0..REPEATS {
+        let (mut sim, mut driver) = build();
+        sim.set_fast_contact(fast);
+        (substeps, splits) = (0, 0);
+        let start = Instant::now();
+        for _ in 0..frames {
+            if let Some(d) = driver.as_mut() {
+                let t = sim.time() + sim.settings.dt;
+                d.advance(&mut sim, t);
+            }
+            let m = sim.step().expect("stable");
+            substeps += u64::from(m.substeps);
+            splits += u64::from(m.contact_splits);
+        }
+        best = best.min(start.elapsed().as_secs_f64() * 1e3 / frames as f64);
+    }
+    let f = frames as f64;
+    (best, substeps as f64 / f, splits as f64 / f)
+}
+
+fn main() {
+    println!("bundled scenes, fast contact on / off:");
+    for (name, frames) in [
+        ("hanging.yaml", 60),
+        ("sphere_drape.yaml", 60),
+        ("table.yaml", 60),
+        ("chair.yaml", 60),
+        ("crumple.yaml", 30),
+        ("flag.yaml", 60),
+        ("robot_towel.yaml", 60),
+        ("robot_cape.yaml", 60),
+        ("robot_drape_arm.yaml", 60),
+        ("robot_pick_towel.yaml", 60),
+    ] {
+        let build = || bundled(name);
+        let (off, _, _) = time(&build, frames, false);
+        let (on, substeps, splits) = time(&build, frames, true);
+        println!(
+            "  {name}: {on:.2} / {off:.2} ms per frame = {:.3}, {substeps:.2} substeps and \
+             {splits:.2} splits per frame",
+            on / off
+        );
+    }
+    let frames = 9;
+    let (rest, _, _) = time(&|| rod(0.0), frames, true);
+    let (fast, substeps, splits) = time(&|| rod(20.0), frames, true);
+    println!(
+        "5 mm rod through the 40 x 40 sheet: 20 m/s {fast:.2} ms per frame, at rest {rest:.2}: \
+         ratio {:.2} (at most 10), {substeps:.2} substeps and {splits:.2} splits per frame",
+        fast / rest
+    );
+}

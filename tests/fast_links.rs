@@ -1,0 +1,408 @@
+//! Fast thin links through a full simulation (issue 18): a rod (capsule or cylinder) or a thin
+//! plate moving at constant velocity through a hanging sheet, stepped from a scene file through
+//! `Simulation`, judged on the state every frame step ends in.
+//!
+//! - Crossings, exactly: each cloth column (a polyline from the sheet's top to its bottom) winds
+//!   around the rod's axis. A column the rod pushes ahead of it, carries or wraps passes the
+//!   axis on the side the rod moves towards: its winding angle (about the axis, signed so that
+//!   passing in front is negative) is below zero. A column the rod passed through lies partly
+//!   behind it and winds the other way: a winding above `pi / 2` is a crossing (a column that
+//!   slid off lies on one side: `|W| < pi / 2`; one carried around is near `-pi`). For a plate:
+//!   a vertex inside the plate's outline and behind its back face.
+//! - Stretch: the largest edge length over rest length of the mesh edges, against the physical
+//!   bound `1 + v / c` of an impact at speed `v` on a sheet of wave speed
+//!   `c = spacing sqrt(k / m) = sqrt(stretch / density)` (a spring chain of stiffness `k` and
+//!   vertex mass `m = density spacing^2`; the strain behind the front of a step in velocity `v`
+//!   is `v / c`), plus what gravity explains (the whole sheet's weight `M g` on one spring of
+//!   stiffness `k`: `M g / k`, 0.05 % here). Acceptance: within that bound plus 10 %.
+
+use drape::scene::Scene;
+use drape::sim::Simulation;
+use drape::Vec3;
+
+/// The sheet: `size` m square, `res` vertices per side, hanging in the world x-z plane, its
+/// centre at z = 1; free (falling) or pinned at its two top corners.
+struct Sheet {
+    size: f64,
+    res: usize,
+    pinned: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Link {
+    Capsule(f64),
+    Cylinder(f64),
+    /// A plate of this thickness (m), 2 m x 1.2 m, covering the sheet.
+    Plate(f64),
+}
+
+/// One case: the link moves along +y at `speed`, its axis along x turned by `angle` (rad)
+/// about y (in the sheet's plane).
+struct Case {
+    sheet: Sheet,
+    link: Link,
+    speed: f64,
+    angle: f64,
+    frames: usize,
+}
+
+const DENSITY: f64 = 0.2;
+const STRETCH: f64 = 1000.0;
+const START_Y: f64 = -0.05;
+const CENTRE_Z: f64 = 1.0;
+
+fn yaml(c: &Case) -> String {
+    let s = &c.sheet;
+    let shape = match c.link {
+        Link::Capsule(r) => format!("{{ type: capsule, radius: {r}, half_height: 0.8 }}"),
+        Link::Cylinder(r) => format!("{{ type: cylinder, radius: {r}, half_height: 0.8 }}"),
+        Link::Plate(t) => format!("{{ type: box, half_extents: [1.0, {}, 0.6] }}", t / 2.0),
+    };
+    // Rods lie along local y: roll them onto x, then turn by `angle` about world y.
+    let rpy = match c.link {
+        Link::Plate(_) => format!("[0.0, {}, 0.0]", c.angle),
+        _ => format!("[0.0, {}, 1.5707963267948966]", c.angle),
+    };
+    let pins = if s.pinned {
+        "    pins: [ { region: top_left }, { region: top_right } ]\n"
+    } else {
+        ""
+    };
+    format!(
+        r#"
+name: fast_link
+duration: 1.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.016666666666666666 }}
+cloths:
+  - name: sheet
+    grid: {{ size: [{size}, {size}], resolution: [{res}, {res}], pose: {{ xyz: [0.0, 0.0, {CENTRE_Z}], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
+    material:
+      density: {DENSITY}
+      stretch: {STRETCH}
+      shear: 100.0
+      bend_warp: 1.0e-5
+      bend_weft: 1.0e-5
+      thickness: 0.004
+      friction: 0.3
+{pins}obstacles:
+  - name: link
+    shape: {shape}
+    pose: {{ xyz: [0.0, {START_Y}, {CENTRE_Z}], rpy: {rpy} }}
+    motion: {{ type: velocity, linear: [0.0, {speed}, 0.0], angular: [0.0, 0.0, 0.0] }}
+collision: {{ mode: continuous }}
+"#,
+        size = s.size,
+        res = s.res,
+        speed = c.speed,
+    )
+}
+
+/// What a case measured over its frames.
+#[derive(Debug, Default)]
+struct Outcome {
+    /// Frames that ended with a crossing, and the first one's description.
+    crossed_frames: usize,
+    first_crossing: Option<String>,
+    max_stretch: f64,
+    bound: f64,
+    substeps: u32,
+    splits: u32,
+    subdivisions: u32,
+}
+
+/// Winding angle (rad) of the polyline `pts` about the line through `o` along unit `axis`,
+/// signed so that a path passing the axis on the `ahead` side winds negatively.
+fn winding(pts: &[Vec3], o: Vec3, axis: Vec3, ahead: Vec3) -> f64 {
+    // In the plane normal to the axis: e1 = ahead, e2 = axis x ahead (up for a rod along x
+    // moving along y); a path from up (+e2) to down (-e2) through +e1 turns clockwise.
+    let e1 = (ahead - axis * ahead.dot(axis)).normalize();
+    let e2 = axis.cross(e1);
+    let angle = |p: Vec3| {
+        let d = p - o;
+        d.dot(e2).atan2(d.dot(e1))
+    };
+    let mut w = 0.0;
+    for pair in pts.windows(2) {
+        let mut d = angle(pair[1]) - angle(pair[0]);
+        while d > std::f64::consts::PI {
+            d -= std::f64::consts::TAU;
+        }
+        while d < -std::f64::consts::PI {
+            d += std::f64::consts::TAU;
+        }
+        w += d;
+    }
+    // Top to bottom past the front is clockwise in (e1, e2): negative.
+    w
+}
+
+/// A crossing at the current state, described, if any.
+fn crossing(sim: &Simulation, c: &Case) -> Option<String> {
+    let stage = sim.collision()?;
+    let o = &stage.obstacles()[0];
+    let pose = o.pose;
+    let res = c.sheet.res;
+    let x = &sim.cloth.x;
+    let ahead = Vec3::Y;
+    match c.link {
+        Link::Plate(t) => {
+            let back = pose.translation.y - t / 2.0;
+            let inside = |p: &Vec3| {
+                let l = pose.inverse_transform_point(*p);
+                l.x.abs() < 1.0 && l.z.abs() < 0.6
+            };
+            let worst = x
+                .iter()
+                .filter(|p| inside(p))
+                .map(|p| back - p.y)
+                .fold(f64::NEG_INFINITY, f64::max);
+            (worst > 0.0).then(|| format!("a vertex {worst:.4} m behind the plate"))
+        }
+        _ => {
+            let axis = pose.transform_vector(Vec3::Y);
+            // Along +x, so that `axis x ahead` is up.
+            let axis = if axis.x < 0.0 { -axis } else { axis };
+            for i in 0..res {
+                // Grid rows run along local v, which the roll turns to world z: row j = top
+                // at j = res - 1.
+                let col: Vec<Vec3> = (0..res).rev().map(|j| x[j * res + i]).collect();
+                let w = winding(&col, pose.translation, axis, ahead);
+                if w > std::f64::consts::FRAC_PI_2 {
+                    return Some(format!("column {i} winds {w:.2} rad around the rod"));
+                }
+            }
+            None
+        }
+    }
+}
+
+/// Largest edge length over rest length of the mesh edges.
+fn max_stretch(sim: &Simulation) -> f64 {
+    let cl = &sim.cloth;
+    let mut worst: f64 = 0.0;
+    for t in &cl.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let rest = (cl.uv[a] - cl.uv[b]).length();
+            worst = worst.max((cl.x[a] - cl.x[b]).length() / rest);
+        }
+    }
+    worst
+}
+
+fn metrics_substeps(sim: &Simulation) -> u32 {
+    sim.last_metrics().substeps
+}
+
+fn run(c: &Case) -> Outcome {
+    let scene = Scene::from_yaml(&yaml(c), "fast_link").unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
+    let spacing = c.sheet.size / (c.sheet.res - 1) as f64;
+    let m = DENSITY * spacing * spacing;
+    let wave = spacing * (STRETCH / m).sqrt();
+    let weight = DENSITY * c.sheet.size * c.sheet.size * 9.81;
+    let mut out = Outcome {
+        bound: 1.0 + c.speed / wave + weight / STRETCH,
+        ..Outcome::default()
+    };
+    for _ in 0..c.frames {
+        let metrics = sim.step().unwrap_or_else(|e| panic!("{e}"));
+        out.substeps += metrics.substeps;
+        out.splits += metrics.contact_splits;
+        out.subdivisions += metrics.subdivisions;
+        if let Some(what) = crossing(&sim, c) {
+            out.crossed_frames += 1;
+            out.first_crossing.get_or_insert(what);
+        }
+        out.max_stretch = out.max_stretch.max(max_stretch(&sim));
+        if std::env::var_os("FAST_LINK_FRAMES").is_some() {
+            eprintln!(
+                "t {:.3}: stretch {:.3}, lowest z {:.3}, rod y {:.3}, substeps {}",
+                sim.time(),
+                max_stretch(&sim),
+                sim.cloth
+                    .x
+                    .iter()
+                    .map(|p| p.z)
+                    .fold(f64::INFINITY, f64::min),
+                sim.collision()
+                    .map_or(0.0, |s| s.obstacles()[0].pose.translation.y),
+                metrics_substeps(&sim)
+            );
+        }
+        assert!(sim.cloth.x.iter().all(|p| p.is_finite()));
+    }
+    out
+}
+
+fn issue_sheet(pinned: bool) -> Sheet {
+    Sheet {
+        size: 1.0,
+        res: 40,
+        pinned,
+    }
+}
+
+/// One case picked by the environment (`FAST_LINK=capsule:0.005:20`), printed.
+#[test]
+#[ignore]
+fn one_case() {
+    let spec = std::env::var("FAST_LINK").unwrap_or_else(|_| "capsule:0.005:20".into());
+    let p: Vec<&str> = spec.split(':').collect();
+    let r: f64 = p[1].parse().unwrap();
+    let link = match p[0] {
+        "capsule" => Link::Capsule(r),
+        "cylinder" => Link::Cylinder(r),
+        _ => Link::Plate(r),
+    };
+    let sheet = if std::env::var_os("FAST_LINK_CI").is_some() {
+        ci_sheet(p.get(3) == Some(&"pinned"))
+    } else {
+        issue_sheet(p.get(3) == Some(&"pinned"))
+    };
+    let c = Case {
+        sheet,
+        link,
+        speed: p[2].parse().unwrap(),
+        angle: 0.0,
+        frames: 9,
+    };
+    println!("{:?}", run(&c));
+}
+
+/// The issue's table, printed (run with `--ignored --nocapture`).
+#[test]
+#[ignore]
+fn issue_table() {
+    for link in [
+        Link::Capsule(0.02),
+        Link::Capsule(0.005),
+        Link::Capsule(0.003),
+        Link::Cylinder(0.005),
+        Link::Plate(0.002),
+    ] {
+        for speed in [5.0, 20.0] {
+            let c = Case {
+                sheet: issue_sheet(false),
+                link,
+                speed,
+                angle: 0.0,
+                frames: 9,
+            };
+            let o = run(&c);
+            println!(
+                "{link:?} {speed} m/s: crossed {} of {} frames ({:?}), stretch {:.2} (bound \
+                 {:.3}), substeps {}, splits {}, subdivisions {}",
+                o.crossed_frames,
+                c.frames,
+                o.first_crossing,
+                o.max_stretch,
+                o.bound,
+                o.substeps,
+                o.splits,
+                o.subdivisions
+            );
+        }
+    }
+}
+
+/// The CI sheet: 0.5 m at 20 vertices a side (2.6 cm spacing, as the issue's sheet).
+fn ci_sheet(pinned: bool) -> Sheet {
+    Sheet {
+        size: 0.5,
+        res: 20,
+        pinned,
+    }
+}
+
+/// Runs a case and checks the acceptance: no crossing at any frame end, finite, no guard stop
+/// and, when `stretch` says so, the largest stretch within the physical bound plus 10 %
+/// (`1.1 (1 + v / c + M g / k)`).
+fn accept(c: &Case, stretch: bool) -> Outcome {
+    let o = run(c);
+    let what = format!(
+        "{:?} at {} m/s, angle {}, pinned {}",
+        c.link, c.speed, c.angle, c.sheet.pinned
+    );
+    eprintln!("{what}: {o:?}");
+    assert_eq!(
+        o.crossed_frames, 0,
+        "{what}: crossed ({:?})",
+        o.first_crossing
+    );
+    assert!(
+        !stretch || o.max_stretch <= 1.1 * o.bound,
+        "{what}: edges stretched {:.3} times their rest length, bound {:.3}",
+        o.max_stretch,
+        o.bound
+    );
+    o
+}
+
+/// Rods of 3 and 5 mm diameter (the spacing is 8.8 and 5.3 diameters) at 5, 20 and 40 m/s, along
+/// the grid and turned 0.5 rad in the sheet's plane.
+fn rods(cylinder: bool, pinned: bool, stretch: bool) {
+    for r in [0.0015, 0.0025] {
+        for speed in [5.0, 20.0, 40.0] {
+            for angle in [0.0, 0.5] {
+                let link = if cylinder {
+                    Link::Cylinder(r)
+                } else {
+                    Link::Capsule(r)
+                };
+                let c = Case {
+                    sheet: ci_sheet(pinned),
+                    link,
+                    speed,
+                    angle,
+                    frames: 9,
+                };
+                accept(&c, stretch);
+            }
+        }
+    }
+}
+
+#[test]
+fn capsules_through_a_free_sheet_carry_it_without_crossing_or_overstretching() {
+    rods(false, false, true);
+}
+
+#[test]
+fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() {
+    rods(true, false, true);
+}
+
+/// Not yet: rods dragging a sheet pinned at its top corners, which must slide off under them.
+/// Measured (CI sheet, 3 and 5 mm rods, 0 and 0.5 rad): no crossing but for a 3 mm cylinder at
+/// 5 m/s and 0.5 rad (2 frames, column 0 winding 1.76 rad, after the sheet slid off the rod's
+/// end: not checked by hand yet); edges 2.1 times their rest length at 5 m/s, 5.4 at 20 m/s, 8.6
+/// at 40 m/s, against bounds of 1.07, 1.28 and 1.57. The free bottom edge catches on the rod
+/// (a 3 mm capsule at 5 m/s: the bottom row 2.3 cm under the rod from 0.067 s to 0.117 s while
+/// the edges at the pins stretch), then slides off. The suspect, not yet confirmed: the
+/// collision stage's post-solve friction with the moving rod, bounded by the normal impulse of
+/// the rod catching up with the lagging vertices every substep, holds the last rows at the
+/// rod's velocity. That stretch comes out of the solve, so the guard's strain check (which
+/// judges what the collision pass adds) does not see it. About 6 minutes for the 24 cases.
+#[test]
+#[ignore = "issue 18 follow-up: pinned sheets overstretch before sliding off the rod"]
+fn rods_through_a_pinned_sheet_do_not_cross_it_or_overstretch() {
+    rods(false, true, true);
+    rods(true, true, true);
+}
+
+/// Free sheets only: a plate covering a pinned sheet would have to pass its pins.
+#[test]
+fn a_2_mm_plate_pushes_the_sheet_without_passing_it() {
+    for speed in [5.0, 20.0, 40.0] {
+        let c = Case {
+            sheet: ci_sheet(false),
+            link: Link::Plate(0.002),
+            speed,
+            angle: 0.3,
+            frames: 9,
+        };
+        accept(&c, true);
+    }
+}
