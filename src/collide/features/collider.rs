@@ -80,11 +80,14 @@ impl FeatureCollider {
         v1: &mut [Vec3],
         touched: &mut [bool],
     ) -> usize {
+        // Cleared before any early return: the caller appends `contacts()` after every call, so
+        // an obstacle without features must not hand on the previous obstacle's contacts (with
+        // culling on, a featureless obstacle first in the list repeated the last near link's).
+        self.contacts.clear();
         if f.is_empty() || self.triangles.is_empty() || s.mode == DetectionMode::Spheres {
             return 0;
         }
         let mut answered = 0;
-        self.contacts.clear();
         for pass in 0..PASSES {
             self.detect(o, f, s, x1, pass > 0);
             if self.hits.is_empty() {
