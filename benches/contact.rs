@@ -1,6 +1,6 @@
 //! Issue 16's benchmark: scene S1 (a 1 m cloth dropped flat onto a fixed sphere, 2 s,
-//! `config/bench_s1.yaml`) and S2 (the same cloth hanging from two corners, no contact,
-//! `config/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole simulation.
+//! `benches/scenes/bench_s1.yaml`) and S2 (the same cloth hanging from two corners, no contact,
+//! `benches/scenes/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole simulation.
 //!
 //! `cargo bench --bench contact` prints one row per run: wall seconds per simulated second
 //! (the steps alone, scene build excluded), p99 and max structural edge stretch (length over
@@ -17,7 +17,7 @@ use drape::sim::Simulation;
 use std::path::Path;
 use std::time::Instant;
 
-/// The sphere of S1 (centre z, radius), as in `config/bench_s1.yaml`.
+/// The sphere of S1 (centre z, radius), as in `benches/scenes/bench_s1.yaml`.
 const SPHERE: ([f64; 3], f64) = ([0.0, 0.0, 0.5], 0.3);
 
 /// What one run measured.
@@ -50,7 +50,8 @@ struct Run {
 
 fn load(file: &str, res: usize) -> Simulation {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
+        .join("benches")
+        .join("scenes")
         .join(file);
     let mut s = Scene::load(&path).expect("bundled bench scene");
     s.cloths[0].grid.resolution = [res, res];

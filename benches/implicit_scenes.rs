@@ -4,7 +4,7 @@
 //!
 //! `cargo bench --bench implicit_scenes` prints, before criterion's timings, the CG iterations
 //! and Newton force evaluations per frame over a fixed run, so that time and work can be compared,
-//! and the cost of one PCG iteration at 64x64 (issue 16, item 2) on S1 (`config/bench_s1.yaml`,
+//! and the cost of one PCG iteration at 64x64 (issue 16, item 2) on S1 (`benches/scenes/bench_s1.yaml`,
 //! the cloth on a sphere) and S2 (`bench_s2.yaml`, hanging): the solver's own count of flops and
 //! least bytes streamed per iteration (block CSR 3x3 product, V-cycle levels, vector passes), the
 //! measured wall time per iteration, this machine's memory bandwidth (a STREAM triad over
@@ -111,8 +111,8 @@ fn iteration_cost(name: &str, res: usize, frames: usize, bandwidth: f64) {
 
 fn scenes(c: &mut Criterion) {
     let bandwidth = triad_bandwidth();
-    iteration_cost("bench_s1.yaml", 64, 120, bandwidth);
-    iteration_cost("bench_s2.yaml", 64, 120, bandwidth);
+    iteration_cost("../benches/scenes/bench_s1.yaml", 64, 120, bandwidth);
+    iteration_cost("../benches/scenes/bench_s2.yaml", 64, 120, bandwidth);
     summary("hanging.yaml", 64, 60);
     summary("robot_towel.yaml", 64, 60);
     let mut g = c.benchmark_group("implicit_scenes");
