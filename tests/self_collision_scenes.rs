@@ -72,7 +72,9 @@ scenes! {
     // The attachments on torso and shoulders pull the edges between them as the arms swing:
     // 6.2x with self-collision off.
     robot_cape: "robot_cape.yaml", 1.2 * 6.2;
-    robot_drape_arm: "robot_drape_arm.yaml", super::STRETCH;
+    // 1.70x at t = 1.40 s with self-collision off since the moving-feature springs (issue 18)
+    // joined the solve: the stretch is the arm's, not self-contact's (1.63x with it on).
+    robot_drape_arm: "robot_drape_arm.yaml", 1.2 * 1.70;
     robot_pick_towel: "robot_pick_towel.yaml", super::STRETCH;
     robot_towel: "robot_towel.yaml", super::STRETCH;
     shirt: "shirt.yaml", super::STRETCH;
