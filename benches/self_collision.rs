@@ -12,27 +12,8 @@
 mod self_check;
 
 use drape::scene::Scene;
-use self_check::bundled;
+use self_check::{bundled, SCENES};
 use std::time::Instant;
-
-const SCENES: &[&str] = &[
-    "chair.yaml",
-    "crumple.yaml",
-    "flag.yaml",
-    "hanging.yaml",
-    "robot_cape.yaml",
-    "robot_drape_arm.yaml",
-    "robot_pick_towel.yaml",
-    "robot_towel.yaml",
-    "shirt.yaml",
-    "sleeve.yaml",
-    "sphere_drape.yaml",
-    "table.yaml",
-    "three_corner_normal.yaml",
-    "three_corner_soft_bending.yaml",
-    "three_corner_soft_stretch.yaml",
-    "three_corner_soft_warp.yaml",
-];
 
 struct Cost {
     ms_per_frame: f64,

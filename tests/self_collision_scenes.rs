@@ -7,7 +7,7 @@
 #[path = "common/self_check.rs"]
 mod self_check;
 
-use self_check::{bundled, run, Judged};
+use self_check::{bundled, run, Judged, SCENES};
 
 /// Edge stretch allowed without a reason in the scene.
 const STRETCH: f64 = 1.5;
@@ -101,26 +101,6 @@ fn every_bundled_scene_is_tested() {
     assert_eq!(files, TESTED);
     assert_eq!(SCENES, TESTED);
 }
-
-/// Every bundled scene file (config/*.yaml except the node's parameters).
-const SCENES: &[&str] = &[
-    "chair.yaml",
-    "crumple.yaml",
-    "flag.yaml",
-    "hanging.yaml",
-    "robot_cape.yaml",
-    "robot_drape_arm.yaml",
-    "robot_pick_towel.yaml",
-    "robot_towel.yaml",
-    "shirt.yaml",
-    "sleeve.yaml",
-    "sphere_drape.yaml",
-    "table.yaml",
-    "three_corner_normal.yaml",
-    "three_corner_soft_bending.yaml",
-    "three_corner_soft_stretch.yaml",
-    "three_corner_soft_warp.yaml",
-];
 
 fn report(name: &str, scale: usize, seconds: Option<f64>) -> Judged {
     let mut scene = bundled(name, scale);

@@ -13,6 +13,27 @@ use drape::Vec3;
 use std::collections::HashMap;
 use std::path::Path;
 
+/// Every bundled scene file (config/*.yaml except the node's parameters), for the test that runs
+/// each with self-collision on and the bench that times each.
+pub const SCENES: &[&str] = &[
+    "chair.yaml",
+    "crumple.yaml",
+    "flag.yaml",
+    "hanging.yaml",
+    "robot_cape.yaml",
+    "robot_drape_arm.yaml",
+    "robot_pick_towel.yaml",
+    "robot_towel.yaml",
+    "shirt.yaml",
+    "sleeve.yaml",
+    "sphere_drape.yaml",
+    "table.yaml",
+    "three_corner_normal.yaml",
+    "three_corner_soft_bending.yaml",
+    "three_corner_soft_stretch.yaml",
+    "three_corner_soft_warp.yaml",
+];
+
 /// A bundled scene with `self_collision: true` added, its grid cloths' resolution and its
 /// garments' edge length scaled by `scale` (1: its own resolution, 2: twice as fine).
 pub fn bundled(name: &str, scale: usize) -> Scene {
