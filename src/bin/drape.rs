@@ -254,7 +254,7 @@ fn run(cli: Cli) -> Result<()> {
             #[cfg(feature = "ros")]
             install_stop_handler(false)?;
             let s = drape::scene::Scene::load(&scene)?;
-            let sim = s.build()?;
+            let (sim, driver) = drape::scene::build_with_robot(&s)?;
             println!(
                 "{}: {} vertices, {} triangles, effects {:?}, integrator {}, dt {} s x {} substeps",
                 scene.display(),
@@ -265,8 +265,21 @@ fn run(cli: Cli) -> Result<()> {
                 sim.settings.dt,
                 sim.settings.substeps
             );
+            if let Some(d) = &driver {
+                print!("{}", drape::robot::RobotSummary::of(d.robot()));
+            }
             if let Some(stage) = sim.collision() {
-                for o in stage.overlaps(&sim.cloth.x) {
+                let overlaps = stage.overlaps(&sim.cloth.x);
+                println!(
+                    "{} obstacles; {}",
+                    stage.obstacles().len(),
+                    if overlaps.is_empty() {
+                        "no cloth vertex starts inside one"
+                    } else {
+                        "cloth starting inside them:"
+                    }
+                );
+                for o in overlaps {
                     println!("  {o}");
                 }
             }

@@ -6,6 +6,7 @@ pub mod grasp;
 pub mod joint_input;
 pub mod kinematics;
 pub mod resolve;
+pub mod summary;
 pub mod urdf;
 
 pub use driver::{joint_stream, JointSource, RobotDriver};
@@ -16,6 +17,7 @@ pub use joint_input::{
 };
 pub use kinematics::{FkReport, Joint, JointKind, JointPositions, Kinematics, Mimic, TreeError};
 pub use resolve::SearchPaths;
+pub use summary::RobotSummary;
 pub use urdf::{RobotError, UrdfOptions};
 
 use crate::mesh::TriMeshData;
@@ -42,6 +44,21 @@ pub struct Robot {
     pub name: String,
     kinematics: Kinematics,
     collision: Vec<Vec<(Pose, Geometry)>>,
+    /// Per link: where its shapes came from, or why it has none (what `drape check` shows).
+    sources: Vec<ShapeSource>,
+}
+
+/// Where a link's collision shapes came from, or why the link is not an obstacle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShapeSource {
+    /// Its `<collision>` elements.
+    Collision,
+    /// Its `<visual>` elements, because it has no `<collision>` and `visual_fallback` is on.
+    VisualFallback,
+    /// No `<collision>`; it has `<visual>` geometry that `visual_fallback: true` would use.
+    SkippedVisualOnly,
+    /// Neither `<collision>` nor `<visual>` geometry (a frame link).
+    SkippedNoGeometry,
 }
 
 impl Robot {
@@ -52,6 +69,11 @@ impl Robot {
     /// Per link (indexed like [`Kinematics::links`]): shapes with their pose in the link frame.
     pub fn collision_shapes(&self) -> &[Vec<(Pose, Geometry)>] {
         &self.collision
+    }
+
+    /// Per link (indexed like [`Kinematics::links`]): where its shapes came from.
+    pub fn shape_sources(&self) -> &[ShapeSource] {
+        &self.sources
     }
 
     pub fn link_names(&self) -> &[String] {

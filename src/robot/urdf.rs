@@ -3,7 +3,7 @@
 
 use super::kinematics::{JointKind, JointSpec, Kinematics, TreeError, MAX_LENGTH};
 use super::resolve::{allowed_roots, resolve_uri, ResolveError, SearchPaths};
-use super::{Geometry, Robot};
+use super::{Geometry, Robot, ShapeSource};
 use crate::input::{InputError, InputKind};
 use crate::mesh::{load_mesh, MeshError, TriMeshData};
 use crate::{Pose, Vec3};
@@ -269,7 +269,14 @@ fn build(
     };
     let mut cache: HashMap<(PathBuf, [u64; 3]), Arc<TriMeshData>> = HashMap::new();
     let mut collision = Vec::with_capacity(urdf.links.len());
+    let mut sources = Vec::with_capacity(urdf.links.len());
     for link in &urdf.links {
+        sources.push(match (link.collision.is_empty(), link.visual.is_empty()) {
+            (false, _) => ShapeSource::Collision,
+            (true, false) if options.visual_fallback => ShapeSource::VisualFallback,
+            (true, false) => ShapeSource::SkippedVisualOnly,
+            (true, true) => ShapeSource::SkippedNoGeometry,
+        });
         let elems: Vec<(&urdf_rs::Pose, &urdf_rs::Geometry)> = if !link.collision.is_empty() {
             link.collision
                 .iter()
@@ -300,6 +307,7 @@ fn build(
         name: urdf.name,
         kinematics,
         collision,
+        sources,
     })
 }
 
