@@ -16,12 +16,7 @@ fn run(name: &str, res: Resolution) -> Outcome {
 
 /// Cases known to fail their criteria, with the measured failure: each must still fail (a case
 /// that passes again has to leave this list), so the gap stays visible instead of ignored.
-const KNOWN_FAILING: &[(&str, &str)] = &[(
-    "self_cape_under_swinging_arms",
-    "16.3 m/s against the 7.0 m/s bound at CI resolution since the self-contact fixes (issue 20) \
-     were merged with the fast-link and solver changes (issues 18, 16); it passed on the \
-     self-contact branch alone; cause not yet measured",
-)];
+const KNOWN_FAILING: &[(&str, &str)] = &[];
 
 fn check(name: &str, res: Resolution) {
     let o = run(name, res);

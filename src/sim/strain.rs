@@ -136,8 +136,14 @@ impl StrainModel {
     }
 
     /// The most stretched edge of `after` among those beyond `bound` there and within it in
-    /// `before` (a non-finite length counts as beyond).
-    pub fn grown_beyond(&self, before: &[Vec3], after: &[Vec3], bound: f64) -> Option<Worst> {
+    /// `before` (a non-finite length counts as beyond), of those `judged(a, b)` keeps.
+    pub fn grown_beyond(
+        &self,
+        before: &[Vec3],
+        after: &[Vec3],
+        bound: f64,
+        judged: impl Fn(usize, usize) -> bool,
+    ) -> Option<Worst> {
         let mut w: Option<Worst> = None;
         for &(i, j, l) in &self.edges {
             let (a, b) = (i as usize, j as usize);
@@ -145,7 +151,7 @@ impl StrainModel {
             if r <= bound || w.is_some_and(|w| r <= w.ratio) {
                 continue;
             }
-            if before[a].distance(before[b]) / l <= bound {
+            if before[a].distance(before[b]) / l <= bound && judged(a, b) {
                 w = Some(Worst {
                     ratio: r,
                     vertices: (a, b),
