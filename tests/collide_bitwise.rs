@@ -73,9 +73,9 @@ const CASES: &[Case] = &[
 ];
 
 const EXPECTED: &[(&str, u64)] = &[
-    ("crumple16_self", 0x4a7a3c5d854e1972),
-    ("chair16_edges", 0xd1bbb39788d461ec),
-    ("pick12_robot", 0x792da5a99ddb14f0),
+    ("crumple16_self", 0xe7d6f4ed089e49e8),
+    ("chair16_edges", 0xf28854857632d31e),
+    ("pick12_robot", 0x1b452164fe1dc6e0),
     ("sphere16_projection", 0xfadc50a365b3a77e),
 ];
 

@@ -23,12 +23,13 @@
 //! solve from the slip at the start of the step and the tangential load the rest of the system
 //! put on the vertex in the last step (see [`Drag::fit`]): a sticker whose drag held more than
 //! `mu N` slides, a slider that Coulomb friction would stop within the step against that load
-//! sticks. After the solve, a slider whose slip reversed (it stopped within the step) becomes a
-//! sticker and a sticker whose drag came out far above the limit (a load that rose within the
-//! step: a cloth edge shoved by a robot link) a slider, and the system is solved once more.
-//! Refitting alone, with modes from the start slip only, chattered on a cloth draped over a
-//! sphere: 64 of ~900 held vertices changed mode after every solve, each step solved 2.9
-//! times (README, "The solve under contact").
+//! sticks. After the solve, a sticker whose drag came out far above the limit (a load that rose
+//! within the step: a cloth edge shoved by a robot link) becomes a slider and the system is
+//! solved once more; a slider whose slip reversed sticks from the next step on (the fit lets
+//! only those slide that Coulomb would not stop against the last load, so a reversal needs the
+//! load to drop within the step). Refitting both ways, with modes from the start slip only,
+//! chattered on a cloth draped over a sphere: 64 of ~900 held vertices changed mode after
+//! every solve, each step solved 2.9 times (README, "The solve under contact").
 
 use crate::linalg::outer;
 use crate::linalg::BlockCsr;
@@ -85,13 +86,7 @@ impl Drag {
     /// (a slow slider is not pushed backwards by a full step of Coulomb force); a sticker
     /// whose drag held more than `mu N` last step slides (Coulomb's threshold, lagged one
     /// step like the normal force).
-    pub fn fit(
-        f: &Friction,
-        filter: &Filter,
-        v: Vec3,
-        h_over_m: f64,
-        load: Vec3,
-    ) -> Option<Self> {
+    pub fn fit(f: &Friction, filter: &Filter, v: Vec3, h_over_m: f64, load: Vec3) -> Option<Self> {
         if !(f.limit.is_finite() && f.limit > 0.0 && f.reference.is_finite()) {
             return None;
         }
@@ -189,6 +184,16 @@ impl Drag {
             Mode::Sliding { direction, across } => {
                 (self.tangent - outer(direction, direction)) * across
             }
+        }
+    }
+
+    /// A sticker whose drag at the iterate's velocity `v` exceeds [`OVERSHOOT`] times the
+    /// limit slides in the direction it was pulled (the held vertices' refit after the solve:
+    /// a slider whose slip reversed sticks from the next step on, see [`Drag::fit`]).
+    pub fn overloaded(&self, v: Vec3) -> Option<Mode> {
+        match self.mode {
+            Mode::Sticking { .. } => self.refit(v),
+            Mode::Sliding { .. } => None,
         }
     }
 

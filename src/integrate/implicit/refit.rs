@@ -62,8 +62,8 @@ impl Implicit {
         changed
     }
 
-    /// Refits the held vertices' drags whose mode the iterate `v0 + dv` contradicts (see
-    /// `Drag::refit`): what the lagged choice before the solve missed, a load that changed
+    /// Makes held vertices' stickers that the iterate `v0 + dv` overloads slide (see
+    /// `Drag::overloaded`): what the lagged choice before the solve missed, a load that rose
     /// within the step (a cloth edge shoved by a robot link); returns whether any changed (the
     /// system then needs a new solve).
     pub(super) fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
@@ -73,7 +73,7 @@ impl Implicit {
         let mut changed = false;
         for g in self.drags.iter_mut() {
             let i = g.vertex;
-            let Some(mode) = g.refit(v0[i] + self.dv[i]) else {
+            let Some(mode) = g.overloaded(v0[i] + self.dv[i]) else {
                 continue;
             };
             let (old_force, old_damping) = (g.force(v0[i]), g.damping());
