@@ -9,9 +9,9 @@ const G: f64 = 9.81;
 const MU: f64 = 0.4;
 
 /// A 0.2 m square cloth lying on a plane tilted by `angle` about y (downhill along -x' of the
-/// tilted frame), with friction `MU`. Returns the centre-of-mass velocity along the downhill
-/// direction at `t1` and `t2`.
-fn slide(angle: f64, t1: f64, t2: f64) -> (f64, f64) {
+/// tilted frame), with friction `MU`, started at `v0` (m/s) downhill. Returns the centre-of-mass
+/// velocity along the downhill direction after every step up to `t_end`, and the step.
+fn run(angle: f64, v0: f64, t_end: f64) -> (Vec<f64>, f64) {
     let (s, c) = angle.sin_cos();
     // The plane's normal (tilted about y), the cloth lying on it `thickness` above.
     let th = 0.004;
@@ -47,6 +47,9 @@ collision: {{ mode: continuous, response: both }}
     let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
     // Downhill: the direction of gravity's tangential part.
     let downhill = drape::Vec3::new(c, 0.0, -s);
+    for v in sim.cloth.v.iter_mut() {
+        *v = downhill * v0;
+    }
     let mass: f64 = sim.cloth.mass.iter().sum();
     let com_velocity = |sim: &drape::sim::Simulation| {
         sim.cloth
@@ -57,17 +60,21 @@ collision: {{ mode: continuous, response: both }}
             .sum::<f64>()
             / mass
     };
-    let (mut v1, mut v2) = (f64::NAN, f64::NAN);
-    let steps = (t2 / sim.settings.dt).round() as usize;
-    let k1 = (t1 / sim.settings.dt).round() as usize;
-    for k in 1..=steps {
+    let dt = sim.settings.dt;
+    let steps = (t_end / dt).round() as usize;
+    let mut out = Vec::with_capacity(steps);
+    for _ in 0..steps {
         sim.step().unwrap_or_else(|e| panic!("{e}"));
-        if k == k1 {
-            v1 = com_velocity(&sim);
-        }
+        out.push(com_velocity(&sim));
     }
-    v2 = v2.max(com_velocity(&sim));
-    (v1, v2)
+    (out, dt)
+}
+
+/// [`run`] from rest: the centre-of-mass velocity at `t1` and `t2`.
+fn slide(angle: f64, t1: f64, t2: f64) -> (f64, f64) {
+    let (v, dt) = run(angle, 0.0, t2);
+    let at = |t: f64| v[(t / dt).round() as usize - 1];
+    (at(t1), at(t2))
 }
 
 /// Below the threshold (a = 0.9 atan mu) the cloth stays put: it creeps at most at the stick
@@ -96,6 +103,64 @@ fn cloth_slides_with_coulomb_acceleration_above_it() {
         assert!(
             (measured - expected).abs() < 1e-4 * expected,
             "angle {factor} x atan(mu): acceleration {measured:.4} m/s^2, Coulomb {expected:.4}"
+        );
+    }
+}
+
+/// Sliding starts when the load exceeds Coulomb's limit, not some substeps later: above the
+/// friction angle the centre of mass follows `g (sin a - mu cos a) t` from the first frames on.
+/// The normal force is lagged one substep and the sliding decision one more (both are decided
+/// on the last substep's forces), so the velocity may trail by at most two substeps of the
+/// full tangential acceleration `g sin a` (what the cloth gains while not yet braked by the
+/// right force), plus the conjugate gradient's tolerance.
+#[test]
+fn sliding_starts_at_the_threshold_without_delay() {
+    for factor in [1.2, 1.6] {
+        let a = factor * MU.atan();
+        let (v, dt) = run(a, 0.0, 0.25);
+        let h = dt / 2.0;
+        let expected_acc = G * (a.sin() - MU * a.cos());
+        for (k, vk) in v.iter().enumerate() {
+            let t = (k + 1) as f64 * dt;
+            let expected = expected_acc * t;
+            let slack = 2.0 * h * G * a.sin() + 1e-4 * expected;
+            assert!(
+                (vk - expected).abs() <= slack,
+                "angle {factor} x atan(mu), t {t:.4} s: velocity {vk:.5} m/s, Coulomb {expected:.5} \
+                 (bound {slack:.2e})"
+            );
+        }
+    }
+}
+
+/// A cloth thrown along a level plane decelerates at `mu g` and stops at `v0 / (mu g)`, and
+/// stays stopped: the last step before the stop does not overshoot into a backward slide
+/// (friction only removes motion). Before the stop the velocity is exact: Coulomb's force is
+/// constant while sliding and the normal force on a level plane is `m g` from the first substep
+/// on, so backward Euler's velocity is `v0 - mu g t` to the conjugate gradient's tolerance.
+#[test]
+fn sliding_decelerates_at_mu_g_and_stops() {
+    let v0 = 0.5;
+    let (v, dt) = run(0.0, v0, 0.4);
+    let h = dt / 2.0;
+    let stop = v0 / (MU * G);
+    for (k, vk) in v.iter().enumerate() {
+        let t = (k + 1) as f64 * dt;
+        if t < stop - 2.0 * h {
+            let expected = v0 - MU * G * t;
+            assert!(
+                (vk - expected).abs() <= 1e-4 * v0,
+                "t {t:.4} s: velocity {vk:.5} m/s, Coulomb {expected:.5}"
+            );
+        } else if t > stop + 2.0 * h {
+            assert!(
+                vk.abs() <= drape::integrate::STICK_SPEED,
+                "t {t:.4} s (stop at {stop:.4} s): still moving at {vk:.3e} m/s"
+            );
+        }
+        assert!(
+            *vk >= -drape::integrate::STICK_SPEED,
+            "t {t:.4} s: friction reversed the cloth ({vk:.3e} m/s)"
         );
     }
 }

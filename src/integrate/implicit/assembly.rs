@@ -55,12 +55,29 @@ impl Implicit {
         a.add_diagonal(d.mass);
         // Friction drags: linear in v, so `A += h c S` and `b += h f_drag(v0)` are exact.
         let filt = &d.constraints.filter;
+        // The last step's tangential load on each vertex, shared among its surfaces by their
+        // Coulomb limits (see `Drag::fit`).
+        let lagged = self.loads.len() == n;
+        self.limit_sum.clear();
+        self.limit_sum.resize(n, 0.0);
+        for f in &d.constraints.friction {
+            match self.limit_sum.get_mut(f.vertex as usize) {
+                Some(l) if f.limit.is_finite() && f.limit > 0.0 => *l += f.limit,
+                _ => {}
+            }
+        }
         self.drags.clear();
+        let (loads, sums) = (&self.loads, &self.limit_sum);
         self.drags
             .extend(d.constraints.friction.iter().filter_map(|f| {
                 let i = f.vertex as usize;
+                let load = if lagged && sums[i] > 0.0 {
+                    loads[i] * (f.limit / sums[i])
+                } else {
+                    Vec3::ZERO
+                };
                 (i < n)
-                    .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i]))
+                    .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i], load))
                     .flatten()
             }));
         friction::add_to_matrix(a, &self.drags, h);

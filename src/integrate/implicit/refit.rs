@@ -1,6 +1,8 @@
-//! The step's active sets after a solve: friction drags refitted to the sliding speed (see
-//! [`crate::integrate::friction`]) and contact springs switched on or off by where the solved
-//! step ends (see [`crate::integrate::contact`]); each change updates `A` and `b` in place.
+//! The step's active sets after a solve: friction drags (held vertices' and edge springs'
+//! contact points') refitted to the sliding speed (see [`crate::integrate::friction`]) and contact springs switched on or
+//! off by where the solved step ends (see [`crate::integrate::contact`]); each change updates
+//! `A` and `b` in place. Held vertices' friction modes are decided before the solve on the last
+//! step's loads (see `Drag::fit`) and refitted only where the solve contradicts them.
 
 use super::assembly::spring_terms;
 use super::solver::Implicit;
@@ -9,7 +11,9 @@ use crate::integrate::Dynamics;
 use crate::Vec3;
 
 impl Implicit {
-    /// [`Self::refit_drags`] for the edge springs' contact points.
+    /// Refits the friction of acting edge springs' contact points that the iterate's velocity
+    /// calls another mode for (see `Drag::refit`); returns whether any changed (the system
+    /// then needs a new solve).
     pub(super) fn refit_edge_drags(&mut self, d: &Dynamics, v0: &[Vec3], h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
             return false;
@@ -58,8 +62,10 @@ impl Implicit {
         changed
     }
 
-    /// Refits drags stronger than their Coulomb limit at the iterate `v0 + dv` (see
-    /// [`crate::integrate::friction`]); returns whether any changed (the system then needs a new solve).
+    /// Makes held vertices' stickers that the iterate `v0 + dv` overloads slide (see
+    /// `Drag::overloaded`): what the lagged choice before the solve missed, a load that rose
+    /// within the step (a cloth edge shoved by a robot link); returns whether any changed (the
+    /// system then needs a new solve).
     pub(super) fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
             return false;
@@ -67,7 +73,7 @@ impl Implicit {
         let mut changed = false;
         for g in self.drags.iter_mut() {
             let i = g.vertex;
-            let Some(mode) = g.refit(v0[i] + self.dv[i]) else {
+            let Some(mode) = g.overloaded(v0[i] + self.dv[i]) else {
                 continue;
             };
             let (old_force, old_damping) = (g.force(v0[i]), g.damping());

@@ -32,6 +32,11 @@ pub struct Implicit {
     pub(super) pcg: Pcg,
     /// Friction drags of the current step's held vertices.
     pub(super) drags: Vec<Drag>,
+    /// Per vertex: the tangential force (N) the rest of the system put on it in the last step,
+    /// `m dv / h - f_friction(v1)` (zero for vertices without friction), which decides the
+    /// next step's friction modes (see `Drag::fit`); and the sum of its Coulomb limits.
+    pub(super) loads: Vec<Vec3>,
+    pub(super) limit_sum: Vec<f64>,
     /// Per edge spring of the step's constraints: whether it acts in the current system.
     pub(super) spring_active: Vec<bool>,
     /// Friction of acting edge springs' contact points: (spring index, drag).
@@ -76,6 +81,8 @@ impl Implicit {
             filtered: Csr::default(),
             pcg: Pcg::default(),
             drags: Vec::new(),
+            loads: Vec::new(),
+            limit_sum: Vec::new(),
             spring_active: Vec::new(),
             edge_drags: Vec::new(),
             filter: Vec::new(),
@@ -126,6 +133,7 @@ impl Integrator for Implicit {
         self.hierarchy = None;
         self.end_potential = None;
         self.older.clear();
+        self.loads.clear();
     }
 
     /// Runs the step on a thread of rayon's pool: its parallel products and sweeps then fork

@@ -153,6 +153,7 @@ impl Implicit {
                 self.impulses[i] = filt[i].constrained(-self.b[i]);
             }
         }
+        self.record_loads(d, v, h);
         for i in 0..n {
             v[i] += self.dv[i];
             x[i] += v[i] * h;
@@ -171,6 +172,25 @@ impl Implicit {
         report.force_evaluations = 2 + newton;
         report.cg_iterations = cg_iterations;
         report.cg_residual = stats.residual;
+    }
+}
+
+impl Implicit {
+    /// Records each held vertex's tangential load of this step, `m dv / h - f_friction(v1)`
+    /// (see [`Implicit::loads`]): what the next step's friction modes are decided on.
+    fn record_loads(&mut self, d: &Dynamics, v0: &[Vec3], h: f64) {
+        let n = v0.len();
+        self.loads.clear();
+        self.loads.resize(n, Vec3::ZERO);
+        for g in &self.drags {
+            let i = g.vertex;
+            self.loads[i] -= g.force(v0[i] + self.dv[i]);
+        }
+        for i in 0..n {
+            if self.limit_sum[i] > 0.0 {
+                self.loads[i] += self.dv[i] * (d.mass[i] / h);
+            }
+        }
     }
 }
 
