@@ -237,36 +237,40 @@ fn sweep_errors_carry_the_key_and_the_value() {
         "three_corner_normal.yaml",
         &format!("{TINY}random:\n  cloths[0].material.stretch: {{ uniform: [5000, 1000] }}\n"),
     );
-    match Sweep::load(&f).unwrap_err() {
-        SweepError::Key {
-            origin,
-            key,
-            source: KeyError::Range(RangeError::Empty { lo, hi }),
-        } => {
-            assert_eq!(origin, f.display().to_string());
-            assert_eq!(key, "random.cloths[0].material.stretch");
-            assert_eq!((lo, hi), (5000.0, 1000.0));
-        }
-        other => panic!("{other:?}"),
-    }
+    let SweepError::Key {
+        origin,
+        key,
+        source,
+    } = Sweep::load(&f).unwrap_err()
+    else {
+        panic!("not a key error");
+    };
+    assert_eq!(origin, f.display().to_string());
+    assert_eq!(key, "random.cloths[0].material.stretch");
+    assert!(
+        matches!(
+            *source,
+            KeyError::Range(RangeError::Empty {
+                lo: 5000.0,
+                hi: 1000.0
+            })
+        ),
+        "{source:?}"
+    );
     let f = sweep_file(
         dir.path(),
         "three_corner_normal.yaml",
         &format!("{TINY}grid:\n  job.time_scale: [-2]\n"),
     );
-    match Sweep::load(&f).unwrap_err() {
-        SweepError::Key {
-            key,
-            source:
-                KeyError::Value {
-                    value,
-                    source: ApplyError::BadTimeScale { value: v2 },
-                },
-            ..
-        } => {
-            assert_eq!(key, "grid.job.time_scale");
-            assert_eq!((value.as_str(), v2.as_str()), ("-2", "-2"));
-        }
+    let SweepError::Key { key, source, .. } = Sweep::load(&f).unwrap_err() else {
+        panic!("not a key error");
+    };
+    assert_eq!(key, "grid.job.time_scale");
+    match *source {
+        KeyError::Value {
+            value,
+            source: ApplyError::BadTimeScale { value: v2 },
+        } => assert_eq!((value.as_str(), v2.as_str()), ("-2", "-2")),
         other => panic!("{other:?}"),
     }
 }

@@ -8,7 +8,8 @@ use crate::scene::SceneError;
 use std::path::PathBuf;
 
 /// A sweep that cannot be planned or run; names the file and the key or job, and keeps the
-/// cause (the scene's error, the I/O or parse error) as its `source()`.
+/// cause (the scene's error, the I/O or parse error) as its `source()`. Large causes are boxed:
+/// the error stays small on every `Ok` path.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SweepError {
@@ -46,7 +47,7 @@ pub enum SweepError {
         origin: String,
         key: String,
         #[source]
-        source: KeyError,
+        source: Box<KeyError>,
     },
     /// A value of a key that the scene rejects (the scene's error is the source).
     #[error("{origin}: {key}: value {value}")]
@@ -65,7 +66,7 @@ pub enum SweepError {
         params: String,
         key: String,
         #[source]
-        source: ApplyError,
+        source: Box<ApplyError>,
     },
     /// A job's scene is not valid (the scene's error is the source).
     #[error("{origin}: job {index} ({params})")]

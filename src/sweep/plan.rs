@@ -150,7 +150,7 @@ impl Sweep {
         let key_err = |key: &str, source: KeyError| SweepError::Key {
             origin: origin.clone(),
             key: key.to_string(),
-            source,
+            source: Box::new(source),
         };
         let file: SweepFile = serde_yaml_ng::from_str(text).map_err(|source| SweepError::Yaml {
             origin: origin.clone(),
@@ -288,16 +288,16 @@ impl Sweep {
                     SweepError::Key {
                         origin: origin.clone(),
                         key: name.clone(),
-                        source: KeyError::Value {
+                        source: Box::new(KeyError::Value {
                             value: inline(&v),
                             source,
-                        },
+                        }),
                     }
                 } else {
                     SweepError::Key {
                         origin: origin.clone(),
                         key: k,
-                        source: source.into(),
+                        source: Box::new(source.into()),
                     }
                 }
             })?;
@@ -376,7 +376,7 @@ impl Sweep {
                     index: job.index,
                     params: job.describe(),
                     key,
-                    source,
+                    source: Box::new(source),
                 })?;
         let scene = self
             .parse_scene(&doc, &format!("job {}", job.index))

@@ -332,7 +332,9 @@ impl NodeParams {
             }
             "color" => {
                 let Value::Sequence(s) = v else {
-                    return Err(ParamError::NotAColor { got: v.clone() });
+                    return Err(ParamError::NotAColor {
+                        got: Box::new(v.clone()),
+                    });
                 };
                 if s.len() != 4 {
                     return Err(ParamError::ColorComponents { count: s.len() });
@@ -429,14 +431,18 @@ fn string(v: &Value) -> Result<String, ParamError> {
     match v {
         Value::String(s) => Ok(s.clone()),
         Value::Null => Ok(String::new()),
-        other => Err(ParamError::NotAString { got: other.clone() }),
+        other => Err(ParamError::NotAString {
+            got: Box::new(other.clone()),
+        }),
     }
 }
 
 fn number(v: &Value) -> Result<f64, ParamError> {
     v.as_f64()
         .filter(|x| x.is_finite())
-        .ok_or_else(|| ParamError::NotANumber { got: v.clone() })
+        .ok_or_else(|| ParamError::NotANumber {
+            got: Box::new(v.clone()),
+        })
 }
 
 fn integer(v: &Value, min: u32, max: u32) -> Result<u32, ParamError> {
@@ -448,8 +454,9 @@ fn integer(v: &Value, min: u32, max: u32) -> Result<u32, ParamError> {
 }
 
 fn boolean(v: &Value) -> Result<bool, ParamError> {
-    v.as_bool()
-        .ok_or_else(|| ParamError::NotABool { got: v.clone() })
+    v.as_bool().ok_or_else(|| ParamError::NotABool {
+        got: Box::new(v.clone()),
+    })
 }
 
 #[cfg(test)]

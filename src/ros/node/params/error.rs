@@ -41,7 +41,8 @@ pub enum ParamsError {
     Args(#[from] ArgsError),
 }
 
-/// What is wrong with one parameter's value ([`ParamsError::Invalid`] names the key).
+/// What is wrong with one parameter's value ([`ParamsError::Invalid`] names the key). Values
+/// are boxed: the error stays small on every `Ok` path of the node.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParamError {
@@ -55,11 +56,11 @@ pub enum ParamError {
     #[error("replaced by {by}")]
     Replaced { by: &'static str },
     #[error("expected a string, got {got:?}")]
-    NotAString { got: Value },
+    NotAString { got: Box<Value> },
     #[error("expected a number, got {got:?}")]
-    NotANumber { got: Value },
+    NotANumber { got: Box<Value> },
     #[error("expected true or false, got {got:?}")]
-    NotABool { got: Value },
+    NotABool { got: Box<Value> },
     #[error("expected {}, got `{got}`", alternatives(expected))]
     NotOneOf {
         expected: &'static [&'static str],
@@ -75,7 +76,7 @@ pub enum ParamError {
     #[error("must be >= 0, got {value}")]
     Negative { value: f64 },
     #[error("expected [r, g, b, a], got {got:?}")]
-    NotAColor { got: Value },
+    NotAColor { got: Box<Value> },
     #[error("expected 4 components, got {count}")]
     ColorComponents { count: usize },
     #[error("component {value} is outside [0, 1]")]
