@@ -270,10 +270,29 @@ fn dae_triangles_and_bad_indices() {
         "{err}"
     );
     let broken = write(dir.path(), "broken.dae", b"<COLLADA><library_geometries>");
-    assert!(matches!(
-        load_mesh(&broken, Vec3::ONE),
-        Err(MeshError::Malformed { .. })
-    ));
+    // Not well-formed XML: the XML parser's error is the cause, not a copy of its text.
+    let err = load_mesh(&broken, Vec3::ONE).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            MeshError::Xml {
+                source: drape::mesh::XmlError::Unclosed,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    let mut chain = err.to_string();
+    let mut cause = std::error::Error::source(&err);
+    while let Some(c) = cause {
+        chain = format!("{chain}: {c}");
+        cause = c.source();
+    }
+    assert!(
+        chain.contains("broken.dae")
+            && chain.contains("document ended before the root element closed"),
+        "{chain}"
+    );
 }
 
 #[test]

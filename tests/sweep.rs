@@ -135,6 +135,52 @@ fn bad_sweep_files_name_the_key_before_any_job_runs() {
             "random.job.time_scale",
             "no robot trajectory",
         ),
+        // Each typed cause below prints its value and what was expected.
+        (
+            "grid:\n  job.time_scale: [0]\n",
+            "grid.job.time_scale",
+            "value 0\n  caused by: must be a number > 0, got 0",
+        ),
+        (
+            "grid:\n  job.joints: [no_such.mcap]\n",
+            "grid.job.joints",
+            "no such bag: ",
+        ),
+        (
+            "grid:\n  job.speed: [1]\n",
+            "grid.job.speed",
+            "unknown job key `job.speed`",
+        ),
+        (
+            "grid:\n  cloths[0]..stretch: [1]\n",
+            "grid.cloths[0]..stretch",
+            "`cloths[0]..stretch`: a key is missing before `.stretch`",
+        ),
+        (
+            "random:\n  solver.dt: 0.1\n",
+            "random.solver.dt",
+            "expected a draw ({ uniform: [lo, hi] }",
+        ),
+        (
+            "random:\n  solver.substeps: { integer: [1.5, 3] }\n",
+            "random.solver.substeps",
+            "integer: expected [lo, hi] integers\n  caused by: ",
+        ),
+        (
+            "random:\n  solver.substeps: { integer: [3, 1] }\n",
+            "random.solver.substeps",
+            "empty range [3, 1]: needs lo <= hi",
+        ),
+        (
+            "random:\n  cloths[0].grid.pose.xyz: { jitter: [0.1, 0.1] }\n",
+            "random.cloths[0].grid.pose.xyz",
+            "jitter needs one amplitude or one per element (the scene's value has 3, the jitter 2)",
+        ),
+        (
+            "grid:\n  cloths[0].name.first: [x]\n",
+            "grid.cloths[0].name.first",
+            "`cloths[0].name` is a string, not a section with key `first`",
+        ),
     ];
     for (body, key, reason) in cases {
         let f = sweep_file(
@@ -179,6 +225,54 @@ fn bad_sweep_files_name_the_key_before_any_job_runs() {
         "{}",
         stderr(&o)
     );
+}
+
+/// The sweep's errors as types: the key, and a cause with the value and the expected range.
+#[test]
+fn sweep_errors_carry_the_key_and_the_value() {
+    use drape::sweep::{ApplyError, KeyError, RangeError, SweepError};
+    let dir = tempfile::tempdir().unwrap();
+    let f = sweep_file(
+        dir.path(),
+        "three_corner_normal.yaml",
+        &format!("{TINY}random:\n  cloths[0].material.stretch: {{ uniform: [5000, 1000] }}\n"),
+    );
+    let SweepError::Key {
+        origin,
+        key,
+        source,
+    } = Sweep::load(&f).unwrap_err()
+    else {
+        panic!("not a key error");
+    };
+    assert_eq!(origin, f.display().to_string());
+    assert_eq!(key, "random.cloths[0].material.stretch");
+    assert!(
+        matches!(
+            *source,
+            KeyError::Range(RangeError::Empty {
+                lo: 5000.0,
+                hi: 1000.0
+            })
+        ),
+        "{source:?}"
+    );
+    let f = sweep_file(
+        dir.path(),
+        "three_corner_normal.yaml",
+        &format!("{TINY}grid:\n  job.time_scale: [-2]\n"),
+    );
+    let SweepError::Key { key, source, .. } = Sweep::load(&f).unwrap_err() else {
+        panic!("not a key error");
+    };
+    assert_eq!(key, "grid.job.time_scale");
+    match *source {
+        KeyError::Value {
+            value,
+            source: ApplyError::BadTimeScale { value: v2 },
+        } => assert_eq!((value.as_str(), v2.as_str()), ("-2", "-2")),
+        other => panic!("{other:?}"),
+    }
 }
 
 /// The acceptance run: 200 jobs of a bundled scene with `-j 2`; every bag opens in rosbags with

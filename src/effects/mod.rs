@@ -18,7 +18,7 @@ mod wind;
 pub use damping::{AirDrag, SpringDamping, VelocityDiffusion};
 pub use effect::{Effect, State, StiffnessBound};
 pub use gravity::Gravity;
-pub use plan::{EffectPlan, Elements, Lattice, Term, WindPlan};
+pub use plan::{EffectKind, EffectPlan, Elements, Lattice, WindPlan};
 pub use set::EffectSet;
 pub use springs::Springs;
 pub use stencils::{Bending, StencilSet, Twist};

@@ -17,10 +17,13 @@ use crate::cloth::topology::{
 };
 use crate::cloth::Cloth;
 use crate::Vec3;
+use serde::{Deserialize, Serialize};
 
-/// One force term of a plan.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Term {
+/// One force term of a plan: an effect a scene can ask for (its `effects:` list, in
+/// snake_case). The scene's `EffectKind` is this type, so the two cannot drift apart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
     Gravity,
     /// Structural springs along warp and weft edges.
     Stretch,
@@ -28,13 +31,28 @@ pub enum Term {
     Shear,
     /// Springs between second neighbours along warp and weft.
     SkipOne,
-    /// Second derivative along warp and along weft.
+    /// Second derivative along warp and along weft (separate rigidities).
     Bending,
     /// Mixed second derivative.
     Twist,
     Wind,
-    /// Spring damping, air drag and velocity diffusion.
+    /// Spring damping, air drag and velocity diffusion (per the material's `damping`).
     Damping,
+}
+
+impl EffectKind {
+    /// Every effect, in the order the benchmarks and the bitwise step tests list them (the
+    /// order effects are built in is the order their forces are summed in).
+    pub const ALL: [EffectKind; 8] = [
+        EffectKind::Gravity,
+        EffectKind::Stretch,
+        EffectKind::Shear,
+        EffectKind::SkipOne,
+        EffectKind::Bending,
+        EffectKind::Twist,
+        EffectKind::Damping,
+        EffectKind::Wind,
+    ];
 }
 
 /// The wind's parameters, without the triangles it acts on.
@@ -65,10 +83,10 @@ impl WindPlan {
 /// Which effects to build, in order, and their shared parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EffectPlan {
-    pub terms: Vec<Term>,
-    /// Gravitational acceleration (m/s^2), for [`Term::Gravity`].
+    pub terms: Vec<EffectKind>,
+    /// Gravitational acceleration (m/s^2), for [`EffectKind::Gravity`].
     pub gravity: Vec3,
-    /// The wind, for [`Term::Wind`] (no wind is built without it).
+    /// The wind, for [`EffectKind::Wind`] (no wind is built without it).
     pub wind: Option<WindPlan>,
 }
 
@@ -116,7 +134,7 @@ impl EffectPlan {
                 .terms
                 .iter()
                 .copied()
-                .filter(|t| !matches!(t, Term::Gravity | Term::Wind))
+                .filter(|t| !matches!(t, EffectKind::Gravity | EffectKind::Wind))
                 .collect(),
             gravity: self.gravity,
             wind: None,
@@ -124,7 +142,7 @@ impl EffectPlan {
     }
 
     /// Whether the plan names `term`.
-    pub fn has(&self, term: Term) -> bool {
+    pub fn has(&self, term: EffectKind) -> bool {
         self.terms.contains(&term)
     }
 
@@ -133,11 +151,11 @@ impl EffectPlan {
         let mut set = EffectSet::new();
         for term in &self.terms {
             match term {
-                Term::Gravity => set.push_gravity(Gravity::new(self.gravity, &cloth.mass)),
-                Term::Stretch | Term::Shear | Term::SkipOne => {
+                EffectKind::Gravity => set.push_gravity(Gravity::new(self.gravity, &cloth.mass)),
+                EffectKind::Stretch | EffectKind::Shear | EffectKind::SkipOne => {
                     let (name, kind) = match term {
-                        Term::Stretch => ("stretch", SpringKind::Structural),
-                        Term::Shear => ("shear", SpringKind::Shear),
+                        EffectKind::Stretch => ("stretch", SpringKind::Structural),
+                        EffectKind::Shear => ("shear", SpringKind::Shear),
                         _ => ("skip_one", SpringKind::SkipOne),
                     };
                     for g in elements.springs(kind) {
@@ -146,26 +164,26 @@ impl EffectPlan {
                         }
                     }
                 }
-                Term::Bending => {
+                EffectKind::Bending => {
                     for g in elements.bending() {
                         if !g.stencils.is_empty() {
                             set.push(Box::new(Bending::new(g.stencils, g.rigidity, g.parameter)));
                         }
                     }
                 }
-                Term::Twist => {
+                EffectKind::Twist => {
                     for g in elements.twist() {
                         if !g.stencils.is_empty() {
                             set.push(Box::new(Twist::new(g.stencils, g.rigidity, g.parameter)));
                         }
                     }
                 }
-                Term::Wind => {
+                EffectKind::Wind => {
                     if let Some(w) = &self.wind {
                         set.push(Box::new(w.effect(cloth.triangles.clone())));
                     }
                 }
-                Term::Damping => {
+                EffectKind::Damping => {
                     let d = elements.spring_damping();
                     if !d.pairs.is_empty() {
                         set.push(Box::new(SpringDamping::new(d.pairs, d.k)));

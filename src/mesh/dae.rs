@@ -14,8 +14,10 @@ use std::path::Path;
 const MAX_NODE_DEPTH: usize = 64;
 
 pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
-    let root =
-        xml::parse(bytes).map_err(|m| MeshError::malformed(path, format!("Collada: {m}")))?;
+    let root = xml::parse(bytes).map_err(|source| MeshError::Xml {
+        path: path.to_path_buf(),
+        source,
+    })?;
     if root.name != "COLLADA" {
         return Err(MeshError::malformed(
             path,

@@ -20,6 +20,13 @@ pub enum MeshError {
     UnsupportedFormat { path: PathBuf },
     #[error("mesh {path}: {message}")]
     Malformed { path: PathBuf, message: String },
+    /// A Collada file that is not well-formed XML (the parser's error is the source).
+    #[error("mesh {path}: Collada")]
+    Xml {
+        path: PathBuf,
+        #[source]
+        source: super::xml::XmlError,
+    },
     #[error("mesh {path}: not a valid OBJ file")]
     Obj {
         path: PathBuf,

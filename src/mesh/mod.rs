@@ -14,6 +14,7 @@ mod xml;
 pub use data::{convex_hull, validate, TriMeshData};
 pub use error::MeshError;
 pub use simplify::simplify;
+pub use xml::XmlError;
 
 use crate::Vec3;
 use std::path::{Path, PathBuf};

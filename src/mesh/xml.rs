@@ -3,6 +3,38 @@
 
 use quick_xml::events::{BytesStart, Event};
 
+/// Why a Collada file is not an XML element tree; the parser's error is the source.
+#[derive(Debug, thiserror::Error)]
+pub enum XmlError {
+    #[error("XML error at byte {position}")]
+    Syntax {
+        position: u64,
+        #[source]
+        source: quick_xml::Error,
+    },
+    #[error("bad attribute in <{element}>")]
+    Attribute {
+        element: String,
+        #[source]
+        source: quick_xml::events::attributes::AttrError,
+    },
+    #[error("bad attribute `{key}` in <{element}>")]
+    AttributeValue {
+        element: String,
+        key: String,
+        #[source]
+        source: quick_xml::Error,
+    },
+    #[error("bad text encoding")]
+    Encoding(#[source] quick_xml::encoding::EncodingError),
+    #[error("XML nested deeper than {max} elements")]
+    TooDeep { max: usize },
+    #[error("unbalanced closing tag")]
+    Unbalanced,
+    #[error("document ended before the root element closed")]
+    Unclosed,
+}
+
 #[derive(Debug, Default)]
 pub(super) struct Element {
     pub name: String,
@@ -41,15 +73,22 @@ impl Element {
     }
 }
 
-fn open(e: &BytesStart) -> Result<Element, String> {
+fn open(e: &BytesStart) -> Result<Element, XmlError> {
     let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
     let mut attrs = Vec::new();
     for a in e.attributes() {
-        let a = a.map_err(|err| format!("bad attribute in <{name}>: {err}"))?;
+        let a = a.map_err(|source| XmlError::Attribute {
+            element: name.clone(),
+            source,
+        })?;
         let key = String::from_utf8_lossy(a.key.local_name().as_ref()).into_owned();
         let value = a
             .unescape_value()
-            .map_err(|err| format!("bad attribute `{key}` in <{name}>: {err}"))?
+            .map_err(|source| XmlError::AttributeValue {
+                element: name.clone(),
+                key: key.clone(),
+                source,
+            })?
             .into_owned();
         attrs.push((key, value));
     }
@@ -61,18 +100,21 @@ fn open(e: &BytesStart) -> Result<Element, String> {
 }
 
 /// Parses a whole document and returns its root element.
-pub(super) fn parse(bytes: &[u8]) -> Result<Element, String> {
+pub(super) fn parse(bytes: &[u8]) -> Result<Element, XmlError> {
     let mut reader = quick_xml::Reader::from_reader(bytes);
     let mut stack: Vec<Element> = Vec::new();
     let mut buf = Vec::new();
     loop {
         let event = reader
             .read_event_into(&mut buf)
-            .map_err(|e| format!("XML error at byte {}: {e}", reader.error_position()))?;
+            .map_err(|source| XmlError::Syntax {
+                position: reader.error_position(),
+                source,
+            })?;
         match event {
             Event::Start(e) => {
                 if stack.len() >= MAX_DEPTH {
-                    return Err(format!("XML nested deeper than {MAX_DEPTH} elements"));
+                    return Err(XmlError::TooDeep { max: MAX_DEPTH });
                 }
                 stack.push(open(&e)?);
             }
@@ -84,7 +126,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Element, String> {
                 }
             }
             Event::End(_) => {
-                let el = stack.pop().ok_or("unbalanced closing tag")?;
+                let el = stack.pop().ok_or(XmlError::Unbalanced)?;
                 match stack.last_mut() {
                     Some(parent) => parent.children.push(el),
                     None => return Ok(el),
@@ -92,7 +134,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Element, String> {
             }
             Event::Text(t) => {
                 if let Some(top) = stack.last_mut() {
-                    let s = t.decode().map_err(|e| format!("bad text encoding: {e}"))?;
+                    let s = t.decode().map_err(XmlError::Encoding)?;
                     top.text.push_str(&s);
                 }
             }
@@ -101,7 +143,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Element, String> {
                     top.text.push_str(&String::from_utf8_lossy(&t));
                 }
             }
-            Event::Eof => return Err("document ended before the root element closed".into()),
+            Event::Eof => return Err(XmlError::Unclosed),
             _ => {}
         }
         buf.clear();

@@ -2,10 +2,10 @@
 //! pieces, pins and attachments, frames, grasps, obstacles, and the effects through the scene's
 //! [`EffectPlan`] (only the effects the scene lists are built); garments are dressed here.
 
-use super::{EffectKind, NameKind, RobotSpec, Scene, SceneError, Selection};
+use super::{NameKind, RobotSpec, Scene, SceneError, Selection};
 use crate::cloth::{Cloth, Panel, Piece};
 use crate::collide::CollisionStage;
-use crate::effects::{EffectPlan, Lattice, Term, WindPlan};
+use crate::effects::{EffectPlan, Lattice, WindPlan};
 use crate::integrate::ImplicitSettings;
 use crate::robot::driver::link_obstacles;
 use crate::robot::{
@@ -391,7 +391,7 @@ impl Scene {
     /// cloth and dressed garments are built from.
     pub fn effect_plan(&self) -> EffectPlan {
         EffectPlan {
-            terms: self.effects.iter().map(|k| term(*k)).collect(),
+            terms: self.effects.clone(),
             gravity: Vec3::from(self.gravity),
             wind: self.wind.as_ref().map(|w| WindPlan {
                 velocity: w.velocity,
@@ -401,19 +401,5 @@ impl Scene {
                 drag_coefficient: w.drag_coefficient,
             }),
         }
-    }
-}
-
-/// The plan's term for a scene's effect name.
-fn term(kind: EffectKind) -> Term {
-    match kind {
-        EffectKind::Gravity => Term::Gravity,
-        EffectKind::Stretch => Term::Stretch,
-        EffectKind::Shear => Term::Shear,
-        EffectKind::SkipOne => Term::SkipOne,
-        EffectKind::Bending => Term::Bending,
-        EffectKind::Twist => Term::Twist,
-        EffectKind::Wind => Term::Wind,
-        EffectKind::Damping => Term::Damping,
     }
 }

@@ -22,47 +22,14 @@ pub use build::{build, build_with_robot};
 
 use crate::cloth::{GridRegion, Material};
 use crate::collide::{CollisionSpec, ObstacleSpec};
+/// An effect a scene can ask for (the effect plan's term, see [`crate::effects::EffectKind`]).
+pub use crate::effects::EffectKind;
 use crate::effects::{Gust, WindKey};
 use crate::integrate::{ImplicitSettings, IntegratorKind};
 use crate::sim::GuardSettings;
 use crate::{Pose, Vec3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// An effect a scene can ask for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EffectKind {
-    Gravity,
-    /// Structural springs along warp and weft edges.
-    Stretch,
-    /// Diagonal springs.
-    Shear,
-    /// Springs between second neighbours along warp and weft.
-    SkipOne,
-    /// Second derivative along warp and along weft (separate rigidities).
-    Bending,
-    /// Mixed second derivative.
-    Twist,
-    Wind,
-    /// Spring damping, air drag and velocity diffusion (per the material's `damping`).
-    Damping,
-}
-
-impl EffectKind {
-    /// Every effect, in the order the benchmarks and the bitwise step tests list them (the
-    /// order effects are built in is the order their forces are summed in).
-    pub const ALL: [EffectKind; 8] = [
-        EffectKind::Gravity,
-        EffectKind::Stretch,
-        EffectKind::Shear,
-        EffectKind::SkipOne,
-        EffectKind::Bending,
-        EffectKind::Twist,
-        EffectKind::Damping,
-        EffectKind::Wind,
-    ];
-}
 
 pub use crate::collide::PoseSpec;
 

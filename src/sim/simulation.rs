@@ -75,7 +75,8 @@ impl Simulation {
 
     /// Starts a new phase with another cloth and effect set (a garment after welding): the
     /// integrator, constraints, energy bookkeeping and the collision stage's cloth topology are
-    /// rebuilt; obstacles and frames keep their poses, the clock keeps running.
+    /// rebuilt, and the bound on the highest frequency recomputed for the new effects and
+    /// masses; obstacles and frames keep their poses, the clock keeps running.
     pub fn replace_cloth(&mut self, cloth: Cloth, effects: EffectSet) -> Result<(), StageError> {
         if let Some(stage) = &self.collision {
             let new = CollisionStage::new(
@@ -91,7 +92,8 @@ impl Simulation {
         self.integrator.prepare(&effects, cloth.len());
         self.coupling.replace_cloth(cloth.len());
         self.cloth = cloth;
-        self.model.effects = effects;
+        // A new model: its cached frequency bound was for the old effects and masses.
+        self.model = Model::new(effects, self.model.caps);
         self.guard.restart();
         Ok(())
     }

@@ -2,11 +2,14 @@
 //! fields (the file, the key, the job) and the cause (the scene's error, the I/O or parse error)
 //! as `source()`; the command line prints the chain.
 
+use super::draw::{DrawError, RangeError, TargetError};
+use super::keypath::SetError;
 use crate::scene::SceneError;
 use std::path::PathBuf;
 
 /// A sweep that cannot be planned or run; names the file and the key or job, and keeps the
-/// cause (the scene's error, the I/O or parse error) as its `source()`.
+/// cause (the scene's error, the I/O or parse error) as its `source()`. Large causes are boxed:
+/// the error stays small on every `Ok` path.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SweepError {
@@ -39,11 +42,12 @@ pub enum SweepError {
         source: std::io::Error,
     },
     /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
-    #[error("{origin}: {key}: {reason}")]
+    #[error("{origin}: {key}")]
     Key {
         origin: String,
         key: String,
-        reason: String,
+        #[source]
+        source: Box<KeyError>,
     },
     /// A value of a key that the scene rejects (the scene's error is the source).
     #[error("{origin}: {key}: value {value}")]
@@ -54,13 +58,15 @@ pub enum SweepError {
         #[source]
         source: JobSceneError,
     },
-    /// A job's values cannot be set on the scene document.
-    #[error("{origin}: job {index} ({params}): {reason}")]
+    /// A job's value of `key` cannot be set on the scene document.
+    #[error("{origin}: job {index} ({params}): {key}")]
     Job {
         origin: String,
         index: usize,
         params: String,
-        reason: String,
+        key: String,
+        #[source]
+        source: Box<ApplyError>,
     },
     /// A job's scene is not valid (the scene's error is the source).
     #[error("{origin}: job {index} ({params})")]
@@ -96,4 +102,61 @@ pub enum JobSceneError {
     Encode(#[source] serde_yaml_ng::Error),
     #[error(transparent)]
     Scene(Box<SceneError>),
+}
+
+/// What is wrong with one key of a sweep file ([`SweepError::Key`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum KeyError {
+    #[error("must be at least 1")]
+    ZeroSamples,
+    /// A key of `set`, `grid` or `random` that is not a string (`got`: the key as JSON).
+    #[error("keys must be key paths (strings), got {got}")]
+    NotAKeyPath { got: String },
+    #[error(transparent)]
+    Target(#[from] TargetError),
+    #[error("job keys vary per job: put them under grid or random")]
+    JobKeyInSet,
+    #[error(transparent)]
+    Set(#[from] SetError),
+    #[error("must be a list of values, got {found}")]
+    NotAList { found: &'static str },
+    #[error("empty list: no values to run")]
+    EmptyList,
+    /// The key is varied by two `grid` entries, or by `grid` and `random` (`also_grid`).
+    #[error("varied twice{}", if *also_grid { " (also under grid)" } else { "" })]
+    VariedTwice { also_grid: bool },
+    #[error(transparent)]
+    Draw(#[from] DrawError),
+    #[error(transparent)]
+    Range(#[from] RangeError),
+    /// This key's value (as JSON) cannot be set over job 0's other values.
+    #[error("value {value}")]
+    Value {
+        value: String,
+        #[source]
+        source: ApplyError,
+    },
+    /// Another key's value of job 0 cannot be set (the key is the error's key).
+    #[error(transparent)]
+    Apply(#[from] ApplyError),
+}
+
+/// Why one sweep value cannot be set on a job's scene document (or as its joints bag).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ApplyError {
+    #[error(transparent)]
+    Target(#[from] TargetError),
+    #[error(transparent)]
+    Set(#[from] SetError),
+    #[error("must be a bag path, got {found}")]
+    NotABagPath { found: &'static str },
+    #[error("no such bag: {}", path.display())]
+    NoSuchBag { path: PathBuf },
+    /// `job.time_scale` that is not a number > 0 (`value` as JSON).
+    #[error("must be a number > 0, got {value}")]
+    BadTimeScale { value: String },
+    #[error("the scene has no robot trajectory to scale")]
+    NoTrajectory,
 }

@@ -4,6 +4,45 @@
 use serde_yaml_ng::{Mapping, Value};
 use std::fmt;
 
+/// Why a text is not a key path; carries the path's text and the part at fault.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum KeyPathError {
+    #[error("empty key path")]
+    Empty,
+    #[error("`{text}`: a key is missing before `{rest}`")]
+    MissingKey { text: String, rest: String },
+    #[error("`{text}`: `{key}` is not a key name")]
+    BadKey { text: String, key: String },
+    #[error("`{text}`: `[` without `]`")]
+    Unclosed { text: String },
+    #[error("`{text}`: `[{index}]` is not a list index")]
+    BadIndex { text: String, index: String },
+    #[error("`{text}`: expected `.` before `{rest}`")]
+    ExpectedDot { text: String, rest: String },
+    #[error("`{text}`: ends with `.`")]
+    TrailingDot { text: String },
+}
+
+/// Why a value cannot be set at a key path of a document: `walked` is the part of the path
+/// that exists, `found` what is there.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SetError {
+    #[error("`{walked}` is {found}, not a section with key `{key}`")]
+    NotSection {
+        walked: String,
+        found: &'static str,
+        key: String,
+    },
+    #[error("`{walked}` is {found}, not a list")]
+    NotList { walked: String, found: &'static str },
+    #[error("`{walked}`: index {index} out of range (the list has {len})")]
+    OutOfRange {
+        walked: String,
+        index: usize,
+        len: usize,
+    },
+}
+
 /// One step of a key path.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Segment {
@@ -26,11 +65,12 @@ impl fmt::Display for KeyPath {
 
 impl KeyPath {
     /// Parses `a.b[0].c`. Keys are `[A-Za-z0-9_]+`; indices are decimal.
-    pub fn parse(text: &str) -> Result<KeyPath, String> {
+    pub fn parse(text: &str) -> Result<KeyPath, KeyPathError> {
         let mut segments = Vec::new();
         let mut rest = text;
+        let whole = || text.to_string();
         if rest.is_empty() {
-            return Err("empty key path".into());
+            return Err(KeyPathError::Empty);
         }
         loop {
             let end = rest.find(['.', '[']).unwrap_or(rest.len());
@@ -38,11 +78,17 @@ impl KeyPath {
             if key.is_empty() {
                 // `[0]` right after another index is fine; anywhere else a key is missing.
                 if !(rest.starts_with('[') && matches!(segments.last(), Some(Segment::Index(_)))) {
-                    return Err(format!("`{text}`: a key is missing before `{rest}`"));
+                    return Err(KeyPathError::MissingKey {
+                        text: whole(),
+                        rest: rest.to_string(),
+                    });
                 }
             } else {
                 if !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-                    return Err(format!("`{text}`: `{key}` is not a key name"));
+                    return Err(KeyPathError::BadKey {
+                        text: whole(),
+                        key: key.to_string(),
+                    });
                 }
                 segments.push(Segment::Key(key.to_string()));
             }
@@ -50,9 +96,10 @@ impl KeyPath {
             while let Some(after) = rest.strip_prefix('[') {
                 let close = after
                     .find(']')
-                    .ok_or_else(|| format!("`{text}`: `[` without `]`"))?;
-                let i: usize = after[..close].parse().map_err(|_| {
-                    format!("`{text}`: `[{}]` is not a list index", &after[..close])
+                    .ok_or_else(|| KeyPathError::Unclosed { text: whole() })?;
+                let i: usize = after[..close].parse().map_err(|_| KeyPathError::BadIndex {
+                    text: whole(),
+                    index: after[..close].to_string(),
                 })?;
                 segments.push(Segment::Index(i));
                 rest = &after[close + 1..];
@@ -62,15 +109,26 @@ impl KeyPath {
             }
             rest = rest
                 .strip_prefix('.')
-                .ok_or_else(|| format!("`{text}`: expected `.` before `{rest}`"))?;
+                .ok_or_else(|| KeyPathError::ExpectedDot {
+                    text: whole(),
+                    rest: rest.to_string(),
+                })?;
             if rest.is_empty() {
-                return Err(format!("`{text}`: ends with `.`"));
+                return Err(KeyPathError::TrailingDot { text: whole() });
             }
         }
         Ok(KeyPath {
             text: text.to_string(),
             segments,
         })
+    }
+
+    /// A path of plain keys (`robot.trajectory.points`), for paths the code itself names.
+    pub fn of_keys(keys: &[&str]) -> KeyPath {
+        KeyPath {
+            text: keys.join("."),
+            segments: keys.iter().map(|k| Segment::Key(k.to_string())).collect(),
+        }
     }
 
     pub fn segments(&self) -> &[Segment] {
@@ -93,7 +151,7 @@ impl KeyPath {
     /// Sets the value at this path. Missing sections are created (the scene's strict parse then
     /// rejects names it does not know); a list index past the end, or a step into a value that
     /// is not a section or a list, is an error that says which part of the path.
-    pub fn set(&self, root: &mut Value, new: Value) -> Result<(), String> {
+    pub fn set(&self, root: &mut Value, new: Value) -> Result<(), SetError> {
         let mut v = root;
         let mut walked = String::new();
         for s in &self.segments {
@@ -103,10 +161,11 @@ impl KeyPath {
             v = match s {
                 Segment::Key(k) => {
                     let Value::Mapping(m) = v else {
-                        return Err(format!(
-                            "`{walked}` is {}, not a section with key `{k}`",
-                            describe(v)
-                        ));
+                        return Err(SetError::NotSection {
+                            walked,
+                            found: describe(v),
+                            key: k.clone(),
+                        });
                     };
                     if !walked.is_empty() {
                         walked.push('.');
@@ -116,12 +175,17 @@ impl KeyPath {
                 }
                 Segment::Index(i) => {
                     let Value::Sequence(l) = v else {
-                        return Err(format!("`{walked}` is {}, not a list", describe(v)));
+                        return Err(SetError::NotList {
+                            walked,
+                            found: describe(v),
+                        });
                     };
                     let n = l.len();
                     walked.push_str(&format!("[{i}]"));
-                    l.get_mut(*i).ok_or_else(|| {
-                        format!("`{walked}`: index {i} out of range (the list has {n})")
+                    l.get_mut(*i).ok_or_else(|| SetError::OutOfRange {
+                        walked: walked.clone(),
+                        index: *i,
+                        len: n,
                     })?
                 }
             };
@@ -169,6 +233,14 @@ mod tests {
         for bad in ["", "a..b", "a.", ".a", "a[x]", "a[1", "a b", "a[0]b"] {
             assert!(KeyPath::parse(bad).is_err(), "{bad}");
         }
+        assert!(matches!(
+            KeyPath::parse("a[x]"),
+            Err(KeyPathError::BadIndex { index, .. }) if index == "x"
+        ));
+        assert_eq!(
+            KeyPath::of_keys(&["robot", "trajectory", "points"]),
+            KeyPath::parse("robot.trajectory.points").unwrap()
+        );
     }
 
     #[test]
@@ -196,11 +268,23 @@ mod tests {
             .unwrap()
             .set(&mut v, Value::from("x"))
             .unwrap_err();
-        assert!(e.contains("cloths[3]") && e.contains("out of range"), "{e}");
+        assert_eq!(
+            e,
+            SetError::OutOfRange {
+                walked: "cloths[3]".into(),
+                index: 3,
+                len: 1
+            }
+        );
+        assert!(e.to_string().contains("out of range"), "{e}");
         let e = KeyPath::parse("cloths[0].name.first")
             .unwrap()
             .set(&mut v, Value::from("x"))
             .unwrap_err();
-        assert!(e.contains("a string"), "{e}");
+        assert!(
+            matches!(&e, SetError::NotSection { walked, found: "a string", key }
+                if walked == "cloths[0].name" && key == "first"),
+            "{e}"
+        );
     }
 }

@@ -21,10 +21,10 @@ pub mod pool;
 mod rng;
 
 pub use collect::{collect, write_plan, Manifest, PlanFile};
-pub use draw::{Draw, Target};
-pub use error::{JobSceneError, SweepError};
+pub use draw::{Draw, DrawError, RangeError, Target, TargetError};
+pub use error::{ApplyError, JobSceneError, KeyError, SweepError};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};
-pub use keypath::KeyPath;
+pub use keypath::{KeyPath, KeyPathError, SetError};
 pub use plan::{Job, JobSpec, Sweep, SweepFile};
 pub use pool::{run_local, PoolOptions, PoolReport};
 

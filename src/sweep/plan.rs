@@ -29,7 +29,7 @@
 //! Jobs are numbered `0..job_count()`: grid point `index / samples`, draw `index % samples`.
 
 use super::draw::{check_draw, sample, Draw, Target};
-use super::error::{JobSceneError, SweepError};
+use super::error::{ApplyError, JobSceneError, KeyError, SweepError};
 use super::keypath::{describe, KeyPath};
 use super::rng::SplitMix64;
 use crate::scene::Scene;
@@ -147,17 +147,17 @@ impl Sweep {
     /// key on its own; [`Sweep::load`] also checks every job.
     pub fn from_yaml(text: &str, path: &Path) -> Result<Sweep, SweepError> {
         let origin = path.display().to_string();
-        let key_err = |key: &str, reason: String| SweepError::Key {
+        let key_err = |key: &str, source: KeyError| SweepError::Key {
             origin: origin.clone(),
             key: key.to_string(),
-            reason,
+            source: Box::new(source),
         };
         let file: SweepFile = serde_yaml_ng::from_str(text).map_err(|source| SweepError::Yaml {
             origin: origin.clone(),
             source,
         })?;
         if file.samples == 0 {
-            return Err(key_err("samples", "must be at least 1".into()));
+            return Err(key_err("samples", KeyError::ZeroSamples));
         }
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let scene_path = dir.join(&file.scene);
@@ -173,25 +173,20 @@ impl Sweep {
                 source,
             })?;
         let key_of = |k: &Value, section: &str| -> Result<String, SweepError> {
-            k.as_str().map(str::to_string).ok_or_else(|| {
-                key_err(
-                    section,
-                    format!("keys must be key paths (strings), got {}", inline(k)),
-                )
-            })
+            k.as_str()
+                .map(str::to_string)
+                .ok_or_else(|| key_err(section, KeyError::NotAKeyPath { got: inline(k) }))
         };
 
         for (k, v) in &file.set {
             let key = key_of(k, "set")?;
-            let target = Target::parse(&key).map_err(|r| key_err(&format!("set.{key}"), r))?;
+            let name = format!("set.{key}");
+            let target = Target::parse(&key).map_err(|r| key_err(&name, r.into()))?;
             let Target::Scene(kp) = target else {
-                return Err(key_err(
-                    &format!("set.{key}"),
-                    "job keys vary per job: put them under grid or random".into(),
-                ));
+                return Err(key_err(&name, KeyError::JobKeyInSet));
             };
             kp.set(&mut base, v.clone())
-                .map_err(|r| key_err(&format!("set.{key}"), r))?;
+                .map_err(|r| key_err(&name, r.into()))?;
         }
 
         let mut seen: Vec<String> = Vec::new();
@@ -199,18 +194,15 @@ impl Sweep {
         for (k, v) in &file.grid {
             let key = key_of(k, "grid")?;
             let name = format!("grid.{key}");
-            let target = Target::parse(&key).map_err(|r| key_err(&name, r))?;
+            let target = Target::parse(&key).map_err(|r| key_err(&name, r.into()))?;
             let Value::Sequence(values) = v else {
-                return Err(key_err(
-                    &name,
-                    format!("must be a list of values, got {}", describe(v)),
-                ));
+                return Err(key_err(&name, KeyError::NotAList { found: describe(v) }));
             };
             if values.is_empty() {
-                return Err(key_err(&name, "empty list: no values to run".into()));
+                return Err(key_err(&name, KeyError::EmptyList));
             }
             if seen.contains(&key) {
-                return Err(key_err(&name, "varied twice".into()));
+                return Err(key_err(&name, KeyError::VariedTwice { also_grid: false }));
             }
             seen.push(key.clone());
             axes.push((key, target, values.clone()));
@@ -219,19 +211,11 @@ impl Sweep {
         for (k, v) in &file.random {
             let key = key_of(k, "random")?;
             let name = format!("random.{key}");
-            let target = Target::parse(&key).map_err(|r| key_err(&name, r))?;
-            let draw = Draw::from_value(v).map_err(|e| {
-                key_err(
-                    &name,
-                    format!(
-                        "{e} (a draw is {{ uniform: [lo, hi] }}, {{ log_uniform: [lo, hi] }}, \
-                         {{ integer: [lo, hi] }}, {{ choice: [..] }} or {{ jitter: a }})"
-                    ),
-                )
-            })?;
-            check_draw(&draw, &target, &base).map_err(|r| key_err(&name, r))?;
+            let target = Target::parse(&key).map_err(|r| key_err(&name, r.into()))?;
+            let draw = Draw::from_value(v).map_err(|e| key_err(&name, e.into()))?;
+            check_draw(&draw, &target, &base).map_err(|r| key_err(&name, r.into()))?;
             if seen.contains(&key) {
-                return Err(key_err(&name, "varied twice (also under grid)".into()));
+                return Err(key_err(&name, KeyError::VariedTwice { also_grid: true }));
             }
             seen.push(key.clone());
             draws.push((key, target, draw));
@@ -299,18 +283,21 @@ impl Sweep {
                 .iter()
                 .map(|(k, old)| (k.clone(), if *k == key { v.clone() } else { old.clone() }))
                 .collect();
-            let (doc, _) = self.document(&params).map_err(|(k, r)| {
+            let (doc, _) = self.document(&params).map_err(|(k, source)| {
                 if k == key {
                     SweepError::Key {
                         origin: origin.clone(),
                         key: name.clone(),
-                        reason: format!("value {}: {r}", inline(&v)),
+                        source: Box::new(KeyError::Value {
+                            value: inline(&v),
+                            source,
+                        }),
                     }
                 } else {
                     SweepError::Key {
                         origin: origin.clone(),
                         key: k,
-                        reason: r,
+                        source: Box::new(source.into()),
                     }
                 }
             })?;
@@ -330,12 +317,12 @@ impl Sweep {
     fn document(
         &self,
         params: &[(String, Value)],
-    ) -> Result<(Value, Option<PathBuf>), (String, String)> {
+    ) -> Result<(Value, Option<PathBuf>), (String, ApplyError)> {
         let mut doc = self.base.clone();
         let mut joints = None;
         let mut scale = None;
         for (key, value) in params {
-            let target = Target::parse(key).map_err(|r| (key.clone(), r))?;
+            let target = Target::parse(key).map_err(|r| (key.clone(), r.into()))?;
             if target == Target::TimeScale {
                 scale = Some((key, value));
                 continue;
@@ -382,14 +369,15 @@ impl Sweep {
     /// Job `job`'s scene, parsed and validated.
     pub fn job_spec(&self, job: &Job) -> Result<JobSpec, SweepError> {
         let origin = || self.path.display().to_string();
-        let (doc, joints) = self
-            .document(&job.params)
-            .map_err(|(k, r)| SweepError::Job {
-                origin: origin(),
-                index: job.index,
-                params: job.describe(),
-                reason: format!("{k}: {r}"),
-            })?;
+        let (doc, joints) =
+            self.document(&job.params)
+                .map_err(|(key, source)| SweepError::Job {
+                    origin: origin(),
+                    index: job.index,
+                    params: job.describe(),
+                    key,
+                    source: Box::new(source),
+                })?;
         let scene = self
             .parse_scene(&doc, &format!("job {}", job.index))
             .map_err(|source| SweepError::JobScene {
@@ -423,16 +411,16 @@ fn apply(
     value: &Value,
     sweep_path: &Path,
     joints: &mut Option<PathBuf>,
-) -> Result<(), String> {
+) -> Result<(), ApplyError> {
     match target {
-        Target::Scene(kp) => kp.set(doc, value.clone()),
+        Target::Scene(kp) => Ok(kp.set(doc, value.clone())?),
         Target::Joints => {
-            let s = value
-                .as_str()
-                .ok_or_else(|| format!("must be a bag path, got {}", describe(value)))?;
+            let s = value.as_str().ok_or(ApplyError::NotABagPath {
+                found: describe(value),
+            })?;
             let p = sweep_path.parent().unwrap_or(Path::new("")).join(s);
             if !p.is_file() {
-                return Err(format!("no such bag: {}", p.display()));
+                return Err(ApplyError::NoSuchBag { path: p });
             }
             *joints = Some(p);
             Ok(())
@@ -441,12 +429,12 @@ fn apply(
             let s = value
                 .as_f64()
                 .filter(|s| s.is_finite() && *s > 0.0)
-                .ok_or_else(|| format!("must be a number > 0, got {}", inline(value)))?;
-            let points = KeyPath::parse("robot.trajectory.points")
-                .ok()
-                .and_then(|k| k.get(doc).cloned());
-            let Some(Value::Sequence(mut points)) = points else {
-                return Err("the scene has no robot trajectory to scale".into());
+                .ok_or_else(|| ApplyError::BadTimeScale {
+                    value: inline(value),
+                })?;
+            let path = KeyPath::of_keys(&["robot", "trajectory", "points"]);
+            let Some(Value::Sequence(mut points)) = path.get(doc).cloned() else {
+                return Err(ApplyError::NoTrajectory);
             };
             for p in &mut points {
                 if let Some(t) = p.get_mut("t") {
@@ -456,9 +444,7 @@ fn apply(
                     }
                 }
             }
-            KeyPath::parse("robot.trajectory.points")
-                .map_err(|e| e.to_string())?
-                .set(doc, Value::Sequence(points))
+            Ok(path.set(doc, Value::Sequence(points))?)
         }
     }
 }

@@ -151,7 +151,7 @@ pub(crate) fn sweep(command: SweepCommand) -> Result<()> {
             let distro = distro
                 .map(|d| d.parse::<drape::ros::Distro>())
                 .transpose()
-                .map_err(|e| anyhow::anyhow!("--distro: {e}"))?;
+                .context("--distro")?;
             let stop = stop_flag()?;
             if local {
                 if index.is_some() {

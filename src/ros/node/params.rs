@@ -3,6 +3,10 @@
 //!
 //! Pure parsing, no DDS: every rule here has a unit test.
 
+mod error;
+
+pub use error::{ArgsError, ParamError, ParamsError};
+
 use super::quality::QualityBounds;
 use crate::ros::Distro;
 use serde_yaml_ng::Value;
@@ -116,40 +120,8 @@ impl Default for NodeParams {
     }
 }
 
-/// A parameters file or command line the node cannot use; names the file and key.
-#[derive(Debug, thiserror::Error)]
-pub enum ParamsError {
-    #[error("cannot read parameters file {path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    /// Not a regular file, too large, not UTF-8 (see `crate::input`).
-    #[error(transparent)]
-    Input(#[from] crate::input::InputError),
-    #[error("{origin}: not YAML")]
-    Yaml {
-        origin: String,
-        #[source]
-        source: serde_yaml_ng::Error,
-    },
-    #[error("{origin}: line {line}: nested deeper than {max} levels")]
-    TooDeep {
-        origin: String,
-        line: usize,
-        max: usize,
-    },
-    #[error("{origin}: no `ros__parameters` for node `{node}` (expected `{node}:`, `/{node}:` or `/**:` at the top)")]
-    NoSection { origin: String, node: String },
-    #[error("{origin}: parameter `{key}`: {reason}")]
-    Invalid {
-        origin: String,
-        key: String,
-        reason: String,
-    },
-    #[error("command line: {0}")]
-    Args(String),
-}
+/// The highest publish or diagnostics rate, in Hz.
+const MAX_RATE: f64 = 1000.0;
 
 /// What the command line asked for, ROS style.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -171,7 +143,9 @@ pub fn parse_ros_args<S: AsRef<str>>(args: &[S]) -> Result<RosArgs, ParamsError>
         let mut value = |flag: &str| {
             it.next()
                 .map(str::to_string)
-                .ok_or_else(|| ParamsError::Args(format!("`{flag}` needs a value")))
+                .ok_or_else(|| ArgsError::NeedsValue {
+                    flag: flag.to_string(),
+                })
         };
         match a {
             "--ros-args" => {}
@@ -183,11 +157,7 @@ pub fn parse_ros_args<S: AsRef<str>>(args: &[S]) -> Result<RosArgs, ParamsError>
                 match from {
                     "__ns" => out.namespace = Some(to.to_string()),
                     "__node" | "__name" => out.node_name = Some(to.to_string()),
-                    _ => {
-                        return Err(ParamsError::Args(format!(
-                            "remap `{v}` is not supported; set topic names in the parameters file"
-                        )))
-                    }
+                    _ => return Err(ArgsError::Remap { remap: v }.into()),
                 }
             }
             "-p" | "--param" => {
@@ -195,16 +165,21 @@ pub fn parse_ros_args<S: AsRef<str>>(args: &[S]) -> Result<RosArgs, ParamsError>
                 let (k, val) = split_assign(&v)?;
                 out.overrides.push((k.to_string(), val.to_string()));
             }
-            other => return Err(ParamsError::Args(format!("unknown ROS argument `{other}`"))),
+            other => {
+                return Err(ArgsError::Unknown {
+                    arg: other.to_string(),
+                }
+                .into())
+            }
         }
     }
     Ok(out)
 }
 
-fn split_assign(s: &str) -> Result<(&str, &str), ParamsError> {
+fn split_assign(s: &str) -> Result<(&str, &str), ArgsError> {
     s.split_once(":=")
         .filter(|(k, _)| !k.is_empty())
-        .ok_or_else(|| ParamsError::Args(format!("expected `name:=value`, got `{s}`")))
+        .ok_or_else(|| ArgsError::NotAssignment { got: s.to_string() })
 }
 
 impl NodeParams {
@@ -261,16 +236,16 @@ impl NodeParams {
             ..NodeParams::default()
         };
         for (key, value) in flat {
-            p.set(&key, &value).map_err(|reason| ParamsError::Invalid {
+            p.set(&key, &value).map_err(|source| ParamsError::Invalid {
                 origin: origin.into(),
                 key: key.clone(),
-                reason,
+                source,
             })?;
         }
-        p.validate().map_err(|(key, reason)| ParamsError::Invalid {
+        p.validate().map_err(|(key, source)| ParamsError::Invalid {
             origin: origin.into(),
             key: key.into(),
-            reason,
+            source,
         })?;
         Ok(p)
     }
@@ -280,28 +255,33 @@ impl NodeParams {
         for (k, v) in overrides {
             let value: Value =
                 serde_yaml_ng::from_str(v).unwrap_or_else(|_| Value::String(v.clone()));
-            self.set(k, &value).map_err(|reason| ParamsError::Invalid {
+            self.set(k, &value).map_err(|source| ParamsError::Invalid {
                 origin: "command line".into(),
                 key: k.clone(),
-                reason,
+                source,
             })?;
         }
         self.validate()
-            .map_err(|(key, reason)| ParamsError::Invalid {
+            .map_err(|(key, source)| ParamsError::Invalid {
                 origin: "command line".into(),
                 key: key.into(),
-                reason,
+                source,
             })
     }
 
-    fn set(&mut self, key: &str, v: &Value) -> Result<(), String> {
+    fn set(&mut self, key: &str, v: &Value) -> Result<(), ParamError> {
         match key {
             "scene" => self.scene = PathBuf::from(string(v)?),
             "robot_description" => {
                 self.robot_description = match string(v)?.as_str() {
                     "file" => DescriptionSource::File,
                     "topic" => DescriptionSource::Topic,
-                    other => return Err(format!("expected `file` or `topic`, got `{other}`")),
+                    other => {
+                        return Err(ParamError::NotOneOf {
+                            expected: &["file", "topic"],
+                            got: other.to_string(),
+                        })
+                    }
                 }
             }
             "publish_rate" => self.publish_rate = number(v)?,
@@ -313,27 +293,23 @@ impl NodeParams {
                 self.distro = if s.is_empty() {
                     None
                 } else {
-                    Some(
-                        s.parse()
-                            .map_err(|e: crate::ros::UnknownDistro| e.to_string())?,
-                    )
+                    Some(s.parse::<Distro>()?)
                 }
             }
             "use_sim_time" => self.use_sim_time = boolean(v)?,
             "paused" => self.paused = boolean(v)?,
             "adaptive_quality" => self.adaptive_quality = boolean(v)?,
             "real_time_preview" => {
-                return Err(
-                    "replaced by `adaptive_quality` (on by default: the node lowers \
-                            quality only when it cannot hold real time) and `quality.*` bounds"
-                        .into(),
-                )
+                return Err(ParamError::Replaced {
+                    by: "`adaptive_quality` (on by default: the node lowers quality only when \
+                         it cannot hold real time) and `quality.*` bounds",
+                })
             }
             "quality.min_substeps" => self.quality.min_substeps = integer(v, 1, 100_000)?,
             "quality.max_cg_tolerance" => {
                 let t = number(v)?;
                 if !(t > 0.0 && t < 1.0) {
-                    return Err(format!("must be in (0, 1), got {t}"));
+                    return Err(ParamError::NotAFraction { value: t });
                 }
                 self.quality.max_cg_tolerance = t;
             }
@@ -341,33 +317,32 @@ impl NodeParams {
                 self.quality.min_cg_max_iterations = integer(v, 1, 100_000)?
             }
             "quality.levels" => self.quality.levels = integer(v, 2, 64)?,
-            "max_backlog_steps" => {
-                let n = number(v)?;
-                if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
-                    return Err(format!("must be an integer in 1..=1000, got {n}"));
-                }
-                self.max_backlog_steps = n as u32;
-            }
+            "max_backlog_steps" => self.max_backlog_steps = integer(v, 1, 1000)?,
             "service_mapping" => {
                 self.service_wire = match string(v)?.to_ascii_lowercase().as_str() {
                     "enhanced" | "fastdds" | "fastrtps" => ServiceWire::Enhanced,
                     "cyclone" | "cyclonedds" => ServiceWire::Cyclone,
                     other => {
-                        return Err(format!("expected `enhanced` or `cyclone`, got `{other}`"))
+                        return Err(ParamError::NotOneOf {
+                            expected: &["enhanced", "cyclone"],
+                            got: other.to_string(),
+                        })
                     }
                 }
             }
             "color" => {
                 let Value::Sequence(s) = v else {
-                    return Err("expected [r, g, b, a]".into());
+                    return Err(ParamError::NotAColor {
+                        got: Box::new(v.clone()),
+                    });
                 };
                 if s.len() != 4 {
-                    return Err(format!("expected 4 components, got {}", s.len()));
+                    return Err(ParamError::ColorComponents { count: s.len() });
                 }
                 for (c, x) in self.color.iter_mut().zip(s) {
                     let x = number(x)?;
                     if !(0.0..=1.0).contains(&x) {
-                        return Err(format!("component {x} is outside [0, 1]"));
+                        return Err(ParamError::ColorComponent { value: x });
                     }
                     *c = x as f32;
                 }
@@ -375,6 +350,7 @@ impl NodeParams {
             k if k.starts_with("topics.") => {
                 let t = &mut self.topics;
                 let slot = match &k["topics.".len()..] {
+                    // The names of `error::TOPICS`.
                     "joint_states" => &mut t.joint_states,
                     "robot_description" => &mut t.robot_description,
                     "clock" => &mut t.clock,
@@ -382,30 +358,32 @@ impl NodeParams {
                     "points" => &mut t.points,
                     "obstacles" => &mut t.obstacles,
                     "diagnostics" => &mut t.diagnostics,
-                    _ => return Err("unknown topic".into()),
+                    _ => return Err(ParamError::UnknownTopic),
                 };
                 let name = string(v)?;
                 if name.is_empty() || name.contains(char::is_whitespace) {
-                    return Err(format!("`{name}` is not a topic name"));
+                    return Err(ParamError::NotATopicName { name });
                 }
                 *slot = name;
             }
-            _ => return Err("unknown parameter".into()),
+            _ => return Err(ParamError::Unknown),
         }
         Ok(())
     }
 
     /// Cross-field checks; returns the key at fault.
-    fn validate(&self) -> Result<(), (&'static str, String)> {
+    fn validate(&self) -> Result<(), (&'static str, ParamError)> {
         if self.scene.as_os_str().is_empty() {
-            return Err(("scene", "missing: name the scene file".into()));
+            return Err(("scene", ParamError::MissingScene));
         }
-        positive_rate(self.publish_rate).map_err(|r| ("publish_rate", r))?;
-        positive_rate(self.diagnostics_rate).map_err(|r| ("diagnostics_rate", r))?;
+        rate(self.publish_rate).map_err(|r| ("publish_rate", r))?;
+        rate(self.diagnostics_rate).map_err(|r| ("diagnostics_rate", r))?;
         if !(self.obstacles_rate.is_finite() && self.obstacles_rate >= 0.0) {
             return Err((
                 "obstacles_rate",
-                format!("must be >= 0, got {}", self.obstacles_rate),
+                ParamError::Negative {
+                    value: self.obstacles_rate,
+                },
             ));
         }
         Ok(())
@@ -413,12 +391,20 @@ impl NodeParams {
 }
 
 /// A publish rate the node can honour: positive, finite, at most 1 kHz.
-pub fn positive_rate(r: f64) -> Result<(), String> {
-    if r.is_finite() && r > 0.0 && r <= 1000.0 {
+fn rate(r: f64) -> Result<(), ParamError> {
+    if r.is_finite() && r > 0.0 && r <= MAX_RATE {
         Ok(())
     } else {
-        Err(format!("must be in (0, 1000] Hz, got {r}"))
+        Err(ParamError::Rate {
+            value: r,
+            max: MAX_RATE,
+        })
     }
+}
+
+/// [`rate`] as the parameter service's reply text (`SetParametersResult.reason` is a string).
+pub fn positive_rate(r: f64) -> Result<(), String> {
+    rate(r).map_err(|e| e.to_string())
 }
 
 fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, Value)>) {
@@ -441,151 +427,37 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, Value)>) {
     }
 }
 
-fn string(v: &Value) -> Result<String, String> {
+fn string(v: &Value) -> Result<String, ParamError> {
     match v {
         Value::String(s) => Ok(s.clone()),
         Value::Null => Ok(String::new()),
-        other => Err(format!("expected a string, got {other:?}")),
+        other => Err(ParamError::NotAString {
+            got: Box::new(other.clone()),
+        }),
     }
 }
 
-fn number(v: &Value) -> Result<f64, String> {
+fn number(v: &Value) -> Result<f64, ParamError> {
     v.as_f64()
         .filter(|x| x.is_finite())
-        .ok_or_else(|| format!("expected a number, got {v:?}"))
+        .ok_or_else(|| ParamError::NotANumber {
+            got: Box::new(v.clone()),
+        })
 }
 
-fn integer(v: &Value, min: u32, max: u32) -> Result<u32, String> {
+fn integer(v: &Value, min: u32, max: u32) -> Result<u32, ParamError> {
     let n = number(v)?;
     if !((f64::from(min)..=f64::from(max)).contains(&n) && n.fract() == 0.0) {
-        return Err(format!("must be an integer in {min}..={max}, got {n}"));
+        return Err(ParamError::NotAnIntegerIn { value: n, min, max });
     }
     Ok(n as u32)
 }
 
-fn boolean(v: &Value) -> Result<bool, String> {
-    v.as_bool()
-        .ok_or_else(|| format!("expected true or false, got {v:?}"))
+fn boolean(v: &Value) -> Result<bool, ParamError> {
+    v.as_bool().ok_or_else(|| ParamError::NotABool {
+        got: Box::new(v.clone()),
+    })
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const FILE: &str = "
-drape:
-  ros__parameters:
-    scene: robot_towel.yaml
-    robot_description: topic
-    publish_rate: 20
-    use_sim_time: true
-    distro: humble
-    service_mapping: cyclone
-    topics:
-      mesh: cloth/mesh
-";
-
-    #[test]
-    fn reads_nested_ros_parameters() {
-        let p = NodeParams::from_yaml(FILE, "f.yaml", "drape").unwrap();
-        assert_eq!(p.scene, PathBuf::from("robot_towel.yaml"));
-        assert_eq!(p.robot_description, DescriptionSource::Topic);
-        assert_eq!(p.publish_rate, 20.0);
-        assert!(p.use_sim_time);
-        assert_eq!(p.distro, Some(Distro::Humble));
-        assert_eq!(p.service_wire, ServiceWire::Cyclone);
-        assert_eq!(p.topics.mesh, "cloth/mesh");
-        assert_eq!(p.topics.points, "~/points");
-        // Other node names and the wildcard.
-        let renamed = FILE.replace("drape:", "/robots/cloth:");
-        assert!(NodeParams::from_yaml(&renamed, "f", "cloth").is_ok());
-        let wild = FILE.replace("drape:", "/**:");
-        assert!(NodeParams::from_yaml(&wild, "f", "other").is_ok());
-    }
-
-    #[test]
-    fn errors_name_file_and_key() {
-        let e = NodeParams::from_yaml(FILE, "f.yaml", "nobody").unwrap_err();
-        assert!(e.to_string().contains("nobody"), "{e}");
-        let bad = FILE.replace("publish_rate: 20", "publish_rate: -1");
-        let e = NodeParams::from_yaml(&bad, "f.yaml", "drape").unwrap_err();
-        let msg = e.to_string();
-        assert!(
-            msg.contains("f.yaml") && msg.contains("publish_rate"),
-            "{msg}"
-        );
-        let typo = FILE.replace("publish_rate", "publish_rat");
-        let e = NodeParams::from_yaml(&typo, "f.yaml", "drape").unwrap_err();
-        assert!(e.to_string().contains("publish_rat"), "{e}");
-        let bad_topic = FILE.replace("mesh: cloth/mesh", "colour: x");
-        assert!(NodeParams::from_yaml(&bad_topic, "f", "drape").is_err());
-        let no_scene = FILE.replace("scene: robot_towel.yaml", "frame_id: base");
-        let e = NodeParams::from_yaml(&no_scene, "f", "drape").unwrap_err();
-        assert!(e.to_string().contains("scene"), "{e}");
-        assert!(NodeParams::from_yaml("drape: [", "f", "drape").is_err());
-    }
-
-    #[test]
-    fn ros_args_and_overrides() {
-        let a = parse_ros_args(&[
-            "--ros-args",
-            "--params-file",
-            "p.yaml",
-            "-r",
-            "__ns:=/robot1",
-            "-r",
-            "__node:=cloth",
-            "-p",
-            "publish_rate:=15.0",
-        ])
-        .unwrap();
-        assert_eq!(a.params_files, [PathBuf::from("p.yaml")]);
-        assert_eq!(a.namespace.as_deref(), Some("/robot1"));
-        assert_eq!(a.node_name.as_deref(), Some("cloth"));
-        let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
-        p.apply_overrides(&a.overrides).unwrap();
-        assert_eq!(p.publish_rate, 15.0);
-        assert!(parse_ros_args(&["-r", "/joint_states:=/js"]).is_err());
-        assert!(parse_ros_args(&["--params-file"]).is_err());
-        assert!(parse_ros_args(&["-p", "x"]).is_err());
-        assert!(parse_ros_args(&["--enclave", "x"]).is_err());
-        assert!(p
-            .apply_overrides(&[("publish_rate".into(), "fast".into())])
-            .is_err());
-    }
-
-    #[test]
-    fn adaptive_quality_and_its_bounds() {
-        let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
-        assert!(p.adaptive_quality);
-        assert_eq!(p.quality, QualityBounds::default());
-        let text = format!(
-            "{FILE}    adaptive_quality: false\n    quality: {{ min_substeps: 2, \
-             max_cg_tolerance: 0.001, min_cg_max_iterations: 80, levels: 4 }}\n"
-        );
-        let q = NodeParams::from_yaml(&text, "f", "drape").unwrap();
-        assert!(!q.adaptive_quality);
-        assert_eq!(
-            q.quality,
-            QualityBounds {
-                min_substeps: 2,
-                max_cg_tolerance: 1e-3,
-                min_cg_max_iterations: 80,
-                levels: 4
-            }
-        );
-        for (key, value) in [
-            ("quality.min_substeps", "0"),
-            ("quality.max_cg_tolerance", "1.5"),
-            ("quality.levels", "1"),
-            ("adaptive_quality", "fast"),
-            ("real_time_preview", "true"),
-        ] {
-            let e = p
-                .apply_overrides(&[(key.into(), value.into())])
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains(key), "{e}");
-        }
-    }
-}
+mod tests;
