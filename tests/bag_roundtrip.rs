@@ -732,7 +732,13 @@ fn writer_rejects_misuse_with_named_culprits() {
         )
         .unwrap_err();
     assert!(
-        matches!(e, BagError::InvalidQos { .. }) && e.to_string().contains("/q"),
+        matches!(
+            &e,
+            BagError::InvalidQos {
+                source: drape::ros::qos::QosError::NotInteger { key: "history", .. },
+                ..
+            }
+        ) && e.to_string().contains("/q"),
         "{e}"
     );
 }

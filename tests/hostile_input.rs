@@ -24,15 +24,9 @@ const BUDGET: Duration = Duration::from_secs(2);
 const SLACK: u32 = 3;
 const KILL_AFTER: Duration = Duration::from_secs(10);
 
-const SCENE: &str = r#"name: NAMEXYZ
-duration: 0.1
-effects: [gravity, stretch, shear]
-solver: { integrator: implicit, dt: 0.02 }
-cloths:
-  - name: sheet
-    grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 1] } }
-    pins: [ { region: top_left } ]
-"#;
+#[path = "common/tiny_scene.rs"]
+mod tiny_scene;
+use tiny_scene::TINY_SCENE as SCENE;
 
 const ROBOT_SCENE: &str = r#"name: NAMEXYZ
 duration: 0.1

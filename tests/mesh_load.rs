@@ -86,7 +86,17 @@ fn stl_header_claiming_four_billion_triangles_is_rejected() {
     let p = write(dir.path(), "huge.stl", &b);
     let err = load_mesh(&p, Vec3::ONE).unwrap_err();
     let msg = err.to_string();
-    assert!(matches!(err, MeshError::Malformed { .. }), "{err:?}");
+    assert!(
+        matches!(
+            err,
+            MeshError::StlTruncated {
+                claimed: 4294967295,
+                len: 134,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
     assert!(
         msg.contains("4294967295") && msg.contains("huge.stl"),
         "{msg}"
@@ -99,7 +109,7 @@ fn truncated_stl_and_stl_with_nan_are_rejected() {
     let p = write(dir.path(), "short.stl", b"tiny");
     assert!(matches!(
         load_mesh(&p, Vec3::ONE),
-        Err(MeshError::Malformed { .. })
+        Err(MeshError::StlHeader { len: 4, .. })
     ));
     let mut t = TETRA;
     t[3][1][0] = f32::NAN;
@@ -264,10 +274,28 @@ fn dae_triangles_and_bad_indices() {
     let m = load_mesh(&ok, Vec3::ONE).unwrap();
     assert_eq!(m.indices, vec![[0, 1, 2]]);
     let bad = write(dir.path(), "bad.dae", tri.replace("IDX", "7").as_bytes());
+    // The file and the geometry in the error, the element at fault in its source.
     let err = load_mesh(&bad, Vec3::ONE).unwrap_err();
     assert!(
-        err.to_string().contains("bad.dae") && err.to_string().contains("7"),
-        "{err}"
+        matches!(
+            &err,
+            MeshError::Collada {
+                geometry: Some(g),
+                source: drape::mesh::DaeError::IndexOutOfRange {
+                    index: 7,
+                    positions: 3
+                },
+                ..
+            } if g == "g"
+        ),
+        "{err:?}"
+    );
+    assert_eq!(
+        format!("{err}: {}", std::error::Error::source(&err).unwrap()),
+        format!(
+            "mesh {}: Collada geometry `g`: vertex index 7 out of range (mesh has 3 positions)",
+            bad.display()
+        )
     );
     let broken = write(dir.path(), "broken.dae", b"<COLLADA><library_geometries>");
     // Not well-formed XML: the XML parser's error is the cause, not a copy of its text.

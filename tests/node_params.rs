@@ -15,15 +15,9 @@ use drape::ros::node::params::{NodeParams, ParamError, ParamsError};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-const SCENE: &str = r#"name: params_test
-duration: 0.1
-effects: [gravity, stretch, shear]
-solver: { integrator: implicit, dt: 0.02 }
-cloths:
-  - name: sheet
-    grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 1] } }
-    pins: [ { region: top_left } ]
-"#;
+#[path = "common/tiny_scene.rs"]
+mod tiny_scene;
+use tiny_scene::TINY_SCENE as SCENE;
 
 const PARAMS: &str = "drape:\n  ros__parameters:\n    scene: scene.yaml\n    publish_rate: 20\n";
 

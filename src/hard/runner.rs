@@ -29,8 +29,8 @@ pub struct Worst {
     pub subdivisions: u64,
     pub unresolved_contacts: u64,
     pub energy_creep: Option<f64>,
-    /// The divergence guard stopped the run with this message.
-    pub guard_stop: Option<String>,
+    /// The divergence guard stopped the run with this error.
+    pub guard_stop: Option<Box<crate::sim::DivergenceError>>,
     pub wall_s: f64,
 }
 
@@ -150,7 +150,7 @@ pub fn run_case(case: Case) -> Outcome {
         let m = match sim.step() {
             Ok(m) => m.clone(),
             Err(e) => {
-                w.guard_stop = Some(e.to_string());
+                w.guard_stop = Some(e);
                 break;
             }
         };

@@ -2,6 +2,7 @@
 //! the visual scene's node transforms, converted to metres (`<unit meter>`) and to Z-up
 //! (`<up_axis>`), the convention of URDF link frames.
 
+use super::dae_error::DaeError;
 use super::data::TriMeshData;
 use super::error::MeshError;
 use super::xml::{self, Element};
@@ -19,16 +20,15 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         source,
     })?;
     if root.name != "COLLADA" {
-        return Err(MeshError::malformed(
+        return Err(collada(
             path,
-            format!(
-                "Collada: root element is <{}>, expected <COLLADA>",
-                root.name
-            ),
+            None,
+            DaeError::Root {
+                found: root.name.clone(),
+            },
         ));
     }
-    let bad = |m: String| MeshError::malformed(path, format!("Collada: {m}"));
-    let (meter, up) = asset_units(&root).map_err(bad)?;
+    let (meter, up) = asset_units(&root).map_err(|e| collada(path, None, e))?;
 
     let mut geometry_elems = Vec::new();
     root.descendants_named("geometry", &mut geometry_elems);
@@ -39,7 +39,7 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
             continue;
         };
         let id = g.attr("id").unwrap_or("");
-        let data = read_mesh(mesh).map_err(|m| bad(format!("geometry `{id}`: {m}")))?;
+        let data = read_mesh(mesh).map_err(|e| collada(path, Some(id), e))?;
         all.append(&data);
         geometries.insert(id, data);
     }
@@ -59,7 +59,8 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
             out: &mut scene_mesh,
         };
         for node in scene.children_named("node") {
-            ctx.visit(node, DMat4::IDENTITY, 0).map_err(bad)?;
+            ctx.visit(node, DMat4::IDENTITY, 0)
+                .map_err(|e| collada(path, None, e))?;
         }
     }
     // Files without a scene (or whose scene instantiates nothing) still carry usable geometry.
@@ -86,7 +87,7 @@ enum UpAxis {
     Z,
 }
 
-fn asset_units(root: &Element) -> Result<(f64, UpAxis), String> {
+fn asset_units(root: &Element) -> Result<(f64, UpAxis), DaeError> {
     let Some(asset) = root.child("asset") else {
         return Ok((1.0, UpAxis::Y));
     };
@@ -94,14 +95,22 @@ fn asset_units(root: &Element) -> Result<(f64, UpAxis), String> {
         None => 1.0,
         Some(s) => match s.trim().parse::<f64>() {
             Ok(m) if m.is_finite() && m > 0.0 => m,
-            _ => return Err(format!("<unit meter=\"{s}\"> is not a positive number")),
+            _ => {
+                return Err(DaeError::UnitMeter {
+                    value: s.to_owned(),
+                })
+            }
         },
     };
     let up = match asset.child("up_axis").map(|u| u.text.trim()) {
         None | Some("Y_UP") => UpAxis::Y,
         Some("Z_UP") => UpAxis::Z,
         Some("X_UP") => UpAxis::X,
-        Some(other) => return Err(format!("unknown <up_axis> `{other}`")),
+        Some(other) => {
+            return Err(DaeError::UpAxis {
+                value: other.to_owned(),
+            })
+        }
     };
     Ok((meter, up))
 }
@@ -131,11 +140,11 @@ struct SceneCtx<'a, 'b> {
 }
 
 impl SceneCtx<'_, '_> {
-    fn visit(&mut self, node: &Element, parent: DMat4, depth: usize) -> Result<(), String> {
+    fn visit(&mut self, node: &Element, parent: DMat4, depth: usize) -> Result<(), DaeError> {
         if depth > MAX_NODE_DEPTH {
-            return Err(format!(
-                "node hierarchy deeper than {MAX_NODE_DEPTH} (cyclic instance_node?)"
-            ));
+            return Err(DaeError::NodeDepth {
+                max: MAX_NODE_DEPTH,
+            });
         }
         let mut m = parent;
         for c in &node.children {
@@ -143,7 +152,7 @@ impl SceneCtx<'_, '_> {
                 "matrix" => {
                     let v = floats(&c.text)?;
                     if v.len() != 16 {
-                        return Err(format!("<matrix> has {} numbers, expected 16", v.len()));
+                        return Err(arity("matrix", v.len(), 16));
                     }
                     // Collada matrices are written row-major.
                     DMat4::from_cols_array(&v.try_into().unwrap_or([0.0; 16])).transpose()
@@ -153,7 +162,7 @@ impl SceneCtx<'_, '_> {
                 "rotate" => {
                     let v = floats(&c.text)?;
                     if v.len() != 4 {
-                        return Err(format!("<rotate> has {} numbers, expected 4", v.len()));
+                        return Err(arity("rotate", v.len(), 4));
                     }
                     let axis = Vec3::new(v[0], v[1], v[2]);
                     if axis.length_squared() == 0.0 {
@@ -170,9 +179,12 @@ impl SceneCtx<'_, '_> {
             match c.name.as_str() {
                 "instance_geometry" => {
                     let url = c.attr("url").unwrap_or("").trim_start_matches('#');
-                    let g = self.geometries.get(url).ok_or_else(|| {
-                        format!("instance_geometry references unknown geometry `{url}`")
-                    })?;
+                    let g = self
+                        .geometries
+                        .get(url)
+                        .ok_or_else(|| DaeError::UnknownGeometry {
+                            url: url.to_owned(),
+                        })?;
                     let mut placed = g.clone();
                     for v in &mut placed.vertices {
                         *v = m.transform_point3(*v);
@@ -187,10 +199,9 @@ impl SceneCtx<'_, '_> {
                 "node" => self.visit(c, m, depth + 1)?,
                 "instance_node" => {
                     let url = c.attr("url").unwrap_or("").trim_start_matches('#');
-                    let n = *self
-                        .nodes
-                        .get(url)
-                        .ok_or_else(|| format!("instance_node references unknown node `{url}`"))?;
+                    let n = *self.nodes.get(url).ok_or_else(|| DaeError::UnknownNode {
+                        url: url.to_owned(),
+                    })?;
                     self.visit(n, m, depth + 1)?;
                 }
                 _ => {}
@@ -200,47 +211,83 @@ impl SceneCtx<'_, '_> {
     }
 }
 
-fn floats(text: &str) -> Result<Vec<f64>, String> {
+fn collada(path: &Path, geometry: Option<&str>, source: DaeError) -> MeshError {
+    MeshError::Collada {
+        path: path.to_path_buf(),
+        geometry: geometry.map(str::to_owned),
+        source,
+    }
+}
+
+fn arity(element: &'static str, found: usize, expected: usize) -> DaeError {
+    DaeError::Arity {
+        element,
+        found,
+        expected,
+    }
+}
+
+fn floats(text: &str) -> Result<Vec<f64>, DaeError> {
     text.split_ascii_whitespace()
         .map(|t| {
-            t.parse::<f64>()
-                .map_err(|_| format!("`{t}` is not a number"))
+            t.parse::<f64>().map_err(|_| DaeError::NotANumber {
+                token: t.to_owned(),
+            })
         })
         .collect()
 }
 
-fn vec3(text: &str, what: &str) -> Result<[f64; 3], String> {
+fn vec3(text: &str, what: &'static str) -> Result<[f64; 3], DaeError> {
     let v = floats(text)?;
-    <[f64; 3]>::try_from(v.as_slice())
-        .map_err(|_| format!("<{what}> has {} numbers, expected 3", v.len()))
+    <[f64; 3]>::try_from(v.as_slice()).map_err(|_| arity(what, v.len(), 3))
 }
 
-fn indices(text: &str) -> Result<Vec<usize>, String> {
+fn indices(text: &str) -> Result<Vec<usize>, DaeError> {
     text.split_ascii_whitespace()
         .map(|t| {
-            t.parse::<usize>()
-                .map_err(|_| format!("`{t}` is not an index"))
+            t.parse::<usize>().map_err(|_| DaeError::NotAnIndex {
+                token: t.to_owned(),
+            })
         })
         .collect()
+}
+
+/// An attribute that must parse as a count or offset.
+fn count_attr(attribute: &'static str, value: &str) -> Result<usize, DaeError> {
+    value
+        .trim()
+        .parse::<usize>()
+        .map_err(|_| DaeError::Attribute {
+            attribute,
+            value: value.to_owned(),
+        })
 }
 
 /// Positions of a `<mesh>`: the `POSITION` input of `<vertices>`, read through its accessor.
-fn positions(mesh: &Element) -> Result<Vec<Vec3>, String> {
-    let vertices = mesh.child("vertices").ok_or("<mesh> without <vertices>")?;
+fn positions(mesh: &Element) -> Result<Vec<Vec3>, DaeError> {
+    let vertices = mesh.child("vertices").ok_or(DaeError::Missing {
+        what: "<mesh> without <vertices>",
+    })?;
     let src_id = vertices
         .children_named("input")
         .find(|i| i.attr("semantic") == Some("POSITION"))
         .and_then(|i| i.attr("source"))
-        .ok_or("<vertices> without a POSITION input")?
+        .ok_or(DaeError::Missing {
+            what: "<vertices> without a POSITION input",
+        })?
         .trim_start_matches('#');
     let source = mesh
         .children_named("source")
         .find(|s| s.attr("id") == Some(src_id))
-        .ok_or_else(|| format!("POSITION source `{src_id}` not found"))?;
+        .ok_or_else(|| DaeError::PositionSource {
+            id: src_id.to_owned(),
+        })?;
     let data = floats(
         &source
             .child("float_array")
-            .ok_or("source without <float_array>")?
+            .ok_or(DaeError::Missing {
+                what: "source without <float_array>",
+            })?
             .text,
     )?;
     let accessor = source
@@ -248,37 +295,29 @@ fn positions(mesh: &Element) -> Result<Vec<Vec3>, String> {
         .and_then(|t| t.child("accessor"));
     let stride = match accessor.and_then(|a| a.attr("stride")) {
         None => 3,
-        Some(s) => s
-            .trim()
-            .parse::<usize>()
-            .map_err(|_| format!("bad accessor stride `{s}`"))?,
+        Some(s) => count_attr("accessor stride", s)?,
     };
     let offset = match accessor.and_then(|a| a.attr("offset")) {
         None => 0,
-        Some(s) => s
-            .trim()
-            .parse::<usize>()
-            .map_err(|_| format!("bad accessor offset `{s}`"))?,
+        Some(s) => count_attr("accessor offset", s)?,
     };
     if stride < 3 {
-        return Err(format!("position accessor stride {stride} < 3"));
+        return Err(DaeError::Stride { stride });
     }
     let count = match accessor.and_then(|a| a.attr("count")) {
-        Some(s) => s
-            .trim()
-            .parse::<usize>()
-            .map_err(|_| format!("bad accessor count `{s}`"))?,
+        Some(s) => count_attr("accessor count", s)?,
         None => data.len().saturating_sub(offset) / stride,
     };
     let needed = count
         .checked_mul(stride)
         .and_then(|n| n.checked_add(offset))
-        .ok_or("accessor count overflows")?;
+        .ok_or(DaeError::AccessorOverflow { count, stride })?;
     if needed > data.len() + (stride - 3) {
-        return Err(format!(
-            "accessor wants {count} positions of stride {stride} but float_array has {} numbers",
-            data.len()
-        ));
+        return Err(DaeError::AccessorShort {
+            count,
+            stride,
+            numbers: data.len(),
+        });
     }
     Ok((0..count)
         .map(|i| {
@@ -289,15 +328,12 @@ fn positions(mesh: &Element) -> Result<Vec<Vec3>, String> {
 }
 
 /// Offset of the VERTEX input and the number of indices per corner in a primitive's `<p>`.
-fn layout(prim: &Element) -> Result<(usize, usize), String> {
+fn layout(prim: &Element) -> Result<(usize, usize), DaeError> {
     let mut vertex_offset = None;
     let mut max_offset = 0;
     for input in prim.children_named("input") {
         let off = match input.attr("offset") {
-            Some(s) => s
-                .trim()
-                .parse::<usize>()
-                .map_err(|_| format!("bad input offset `{s}`"))?,
+            Some(s) => count_attr("input offset", s)?,
             None => 0,
         };
         max_offset = max_offset.max(off);
@@ -305,22 +341,23 @@ fn layout(prim: &Element) -> Result<(usize, usize), String> {
             vertex_offset = Some(off);
         }
     }
-    let v = vertex_offset.ok_or_else(|| format!("<{}> has no VERTEX input", prim.name))?;
+    let v = vertex_offset.ok_or_else(|| DaeError::NoVertexInput {
+        primitive: prim.name.clone(),
+    })?;
     Ok((v, max_offset + 1))
 }
 
-fn read_mesh(mesh: &Element) -> Result<TriMeshData, String> {
+fn read_mesh(mesh: &Element) -> Result<TriMeshData, DaeError> {
     let vertices = positions(mesh)?;
     let n = vertices.len();
     let mut tris = Vec::new();
-    let corner = |p: &[usize], stride: usize, voff: usize, k: usize| -> Result<u32, String> {
-        let i = *p
-            .get(k * stride + voff)
-            .ok_or("<p> shorter than the primitive's count implies")?;
+    let corner = |p: &[usize], stride: usize, voff: usize, k: usize| -> Result<u32, DaeError> {
+        let i = *p.get(k * stride + voff).ok_or(DaeError::ShortIndexList)?;
         if i >= n {
-            return Err(format!(
-                "vertex index {i} out of range (mesh has {n} positions)"
-            ));
+            return Err(DaeError::IndexOutOfRange {
+                index: i,
+                positions: n,
+            });
         }
         Ok(i as u32)
     };
@@ -329,7 +366,9 @@ fn read_mesh(mesh: &Element) -> Result<TriMeshData, String> {
             "triangles" | "polylist" | "polygons" => {}
             "lines" | "linestrips" => continue,
             other @ ("trifans" | "tristrips") => {
-                return Err(format!("<{other}> primitives are not supported"))
+                return Err(DaeError::Unsupported {
+                    primitive: other.to_owned(),
+                })
             }
             _ => continue,
         }
@@ -368,7 +407,7 @@ fn read_mesh(mesh: &Element) -> Result<TriMeshData, String> {
                         ]);
                     }
                 }
-                base = base.checked_add(c).ok_or("vcount overflows")?;
+                base = base.checked_add(c).ok_or(DaeError::VcountOverflow)?;
             }
         }
     }

@@ -2,7 +2,7 @@
 //! parsers (stl, obj, dae) and the dispatch in `mod.rs` share it without a cycle.
 
 use crate::Vec3;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Why a mesh file could not be used; always carries the file path.
 #[derive(Debug, thiserror::Error)]
@@ -18,8 +18,31 @@ pub enum MeshError {
     },
     #[error("mesh {path}: unsupported extension (expected .stl, .obj or .dae)")]
     UnsupportedFormat { path: PathBuf },
-    #[error("mesh {path}: {message}")]
-    Malformed { path: PathBuf, message: String },
+    /// Well-formed XML that is not usable Collada geometry; `geometry` is the `<geometry id>`
+    /// being read, when the fault is inside one.
+    #[error("mesh {path}: Collada{}", geometry.as_ref().map(|g| format!(" geometry `{g}`")).unwrap_or_default())]
+    Collada {
+        path: PathBuf,
+        geometry: Option<String>,
+        #[source]
+        source: super::dae_error::DaeError,
+    },
+    #[error("mesh {path}: OBJ object `{object}` has a ragged position or index array")]
+    RaggedObj { path: PathBuf, object: String },
+    #[error("mesh {path}: binary STL is {len} bytes, shorter than its 84-byte header")]
+    StlHeader { path: PathBuf, len: usize },
+    #[error(
+        "mesh {path}: binary STL header claims {claimed} triangles ({needed} bytes) but the file \
+         has only {len} bytes"
+    )]
+    StlTruncated {
+        path: PathBuf,
+        claimed: u64,
+        needed: u64,
+        len: usize,
+    },
+    #[error("mesh {path}: {vertices} vertices are too many for u32 indices")]
+    TooManyVertices { path: PathBuf, vertices: usize },
     /// A Collada file that is not well-formed XML (the parser's error is the source).
     #[error("mesh {path}: Collada")]
     Xml {
@@ -54,13 +77,4 @@ pub enum MeshError {
     NonFinite { path: PathBuf, index: usize },
     #[error("mesh {path}: scale {scale} must be finite and non-zero on every axis")]
     BadScale { path: PathBuf, scale: Vec3 },
-}
-
-impl MeshError {
-    pub(crate) fn malformed(path: &Path, message: impl Into<String>) -> Self {
-        MeshError::Malformed {
-            path: path.to_path_buf(),
-            message: message.into(),
-        }
-    }
 }

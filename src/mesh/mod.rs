@@ -4,6 +4,7 @@
 //! and coordinates are validated, and every error names the file it came from.
 
 mod dae;
+mod dae_error;
 mod data;
 mod error;
 mod obj;
@@ -11,6 +12,7 @@ mod simplify;
 mod stl;
 mod xml;
 
+pub use dae_error::DaeError;
 pub use data::{convex_hull, validate, TriMeshData};
 pub use error::MeshError;
 pub use simplify::simplify;

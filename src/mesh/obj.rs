@@ -24,13 +24,10 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
     for model in &models {
         let m = &model.mesh;
         if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
-            return Err(MeshError::malformed(
-                path,
-                format!(
-                    "OBJ object `{}`: ragged position or index array",
-                    model.name
-                ),
-            ));
+            return Err(MeshError::RaggedObj {
+                path: path.to_path_buf(),
+                object: model.name.clone(),
+            });
         }
         let part = TriMeshData {
             vertices: m

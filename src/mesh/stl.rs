@@ -25,23 +25,19 @@ pub(super) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         return parse_ascii(path, bytes);
     }
     let Some(n) = claimed else {
-        return Err(MeshError::malformed(
-            path,
-            format!(
-                "binary STL is {} bytes, shorter than its 84-byte header",
-                bytes.len()
-            ),
-        ));
+        return Err(MeshError::StlHeader {
+            path: path.to_path_buf(),
+            len: bytes.len(),
+        });
     };
     let needed = HEADER as u64 + n * RECORD as u64;
     if needed > bytes.len() as u64 {
-        return Err(MeshError::malformed(
-            path,
-            format!(
-                "binary STL header claims {n} triangles ({needed} bytes) but the file has only {} bytes",
-                bytes.len()
-            ),
-        ));
+        return Err(MeshError::StlTruncated {
+            path: path.to_path_buf(),
+            claimed: n,
+            needed,
+            len: bytes.len(),
+        });
     }
     let n = n as usize;
     let mut mesh = TriMeshData {
@@ -83,12 +79,13 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
         .map(|v| Vec3::new(v.0[0] as f64, v.0[1] as f64, v.0[2] as f64))
         .collect();
     let mut indices = Vec::with_capacity(indexed.faces.len());
+    let too_many = || MeshError::TooManyVertices {
+        path: path.to_path_buf(),
+        vertices: indexed.vertices.len(),
+    };
     for f in &indexed.faces {
         let [a, b, c] = f.vertices;
-        let conv = |i: usize| {
-            u32::try_from(i)
-                .map_err(|_| MeshError::malformed(path, "too many vertices for u32 indices"))
-        };
+        let conv = |i: usize| u32::try_from(i).map_err(|_| too_many());
         indices.push([conv(a)?, conv(b)?, conv(c)?]);
     }
     Ok(TriMeshData { vertices, indices })

@@ -43,27 +43,49 @@ pub fn offered_qos_profiles(reliability: Reliability, durability: Durability) ->
     )
 }
 
+/// Why user-supplied `offered_qos_profiles` YAML would not replay on Humble.
+#[derive(Debug, thiserror::Error)]
+pub enum QosError {
+    #[error("not YAML")]
+    Yaml(#[source] serde_yaml_ng::Error),
+    #[error("expected a YAML sequence of QoS profiles")]
+    NotSequence,
+    #[error("profile {index} is not a mapping")]
+    NotMapping { index: usize },
+    /// Humble reads the rmw enums only as integers (see the module doc).
+    #[error("profile {index}: `{key}` must be an rmw enum integer (Humble form), got {got}")]
+    NotInteger {
+        index: usize,
+        key: &'static str,
+        got: String,
+    },
+    #[error("profile {index}: missing `{key}`")]
+    Missing { index: usize, key: &'static str },
+}
+
 /// Checks that user-supplied `offered_qos_profiles` YAML is a sequence of profiles in
-/// the integer form; returns a description of the first problem.
-pub fn validate(yaml: &str) -> Result<(), String> {
+/// the integer form; returns the first problem.
+pub fn validate(yaml: &str) -> Result<(), QosError> {
     use serde_yaml_ng::Value;
-    let value: Value = serde_yaml_ng::from_str(yaml).map_err(|e| format!("not YAML: {e}"))?;
+    let value: Value = serde_yaml_ng::from_str(yaml).map_err(QosError::Yaml)?;
     let Value::Sequence(profiles) = value else {
-        return Err("expected a YAML sequence of QoS profiles".to_string());
+        return Err(QosError::NotSequence);
     };
-    for (i, profile) in profiles.iter().enumerate() {
+    for (index, profile) in profiles.iter().enumerate() {
         let Value::Mapping(map) = profile else {
-            return Err(format!("profile {i} is not a mapping"));
+            return Err(QosError::NotMapping { index });
         };
         for key in ["history", "reliability", "durability", "liveliness"] {
             match map.get(key) {
                 Some(Value::Number(_)) => {}
                 Some(other) => {
-                    return Err(format!(
-                    "profile {i}: `{key}` must be an rmw enum integer (Humble form), got {other:?}"
-                ))
+                    return Err(QosError::NotInteger {
+                        index,
+                        key,
+                        got: format!("{other:?}"),
+                    })
                 }
-                None => return Err(format!("profile {i}: missing `{key}`")),
+                None => return Err(QosError::Missing { index, key }),
             }
         }
     }
@@ -91,8 +113,22 @@ mod tests {
         let named = offered_qos_profiles(Reliability::Reliable, Durability::Volatile)
             .replace("reliability: 1", "reliability: reliable");
         let err = validate(&named).unwrap_err();
-        assert!(err.contains("reliability"), "{err}");
-        assert!(validate("[").is_err());
+        assert!(
+            matches!(
+                err,
+                QosError::NotInteger {
+                    index: 0,
+                    key: "reliability",
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        assert!(matches!(
+            validate("[1]"),
+            Err(QosError::NotMapping { index: 0 })
+        ));
+        assert!(matches!(validate("["), Err(QosError::Yaml(_))));
         assert!(validate("[]").is_ok());
     }
 }

@@ -63,8 +63,12 @@ pub enum BagError {
     },
     #[error("type {type_name} has no schema definition (implement RosMessage::definition)")]
     NoDefinition { type_name: String },
-    #[error("invalid offered_qos_profiles for topic {topic:?}: {reason}")]
-    InvalidQos { topic: String, reason: String },
+    #[error("invalid offered_qos_profiles for topic {topic:?}")]
+    InvalidQos {
+        topic: String,
+        #[source]
+        source: crate::ros::qos::QosError,
+    },
     #[error("topic id {0} was not issued by this bag writer")]
     UnknownTopicId(usize),
     #[error("topic {topic:?} records {expected}, got a {got}")]

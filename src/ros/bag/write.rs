@@ -105,9 +105,9 @@ impl BagWriter {
         }
         let qos_yaml = match qos {
             Some(yaml) => {
-                qos::validate(yaml).map_err(|reason| BagError::InvalidQos {
+                qos::validate(yaml).map_err(|source| BagError::InvalidQos {
                     topic: topic.to_string(),
-                    reason,
+                    source,
                 })?;
                 yaml.to_string()
             }
