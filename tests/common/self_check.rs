@@ -84,8 +84,14 @@ fn tri_tri(a: [Vec3; 3], b: [Vec3; 3]) -> bool {
 
 /// Exact number of intersecting triangle pairs that share no vertex, at positions `x`.
 pub fn intersecting_pairs(x: &[Vec3], tris: &[[u32; 3]]) -> usize {
+    intersecting_pair_list(x, tris).len()
+}
+
+/// The intersecting triangle pairs that share no vertex (triangle indices), at positions `x`.
+pub fn intersecting_pair_list(x: &[Vec3], tris: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
     if tris.is_empty() {
-        return 0;
+        return out;
     }
     let boxes: Vec<(Vec3, Vec3)> = tris
         .iter()
@@ -112,7 +118,6 @@ pub fn intersecting_pairs(x: &[Vec3], tris: &[[u32; 3]]) -> usize {
             }
         }
     }
-    let mut count = 0;
     for (cell_key, members) in &grid {
         for (ai, &a) in members.iter().enumerate() {
             for &b in &members[ai + 1..] {
@@ -129,12 +134,12 @@ pub fn intersecting_pairs(x: &[Vec3], tris: &[[u32; 3]]) -> usize {
                     continue;
                 }
                 if tri_tri(ta.map(|i| x[i as usize]), tb.map(|i| x[i as usize])) {
-                    count += 1;
+                    out.push((a, b));
                 }
             }
         }
     }
-    count
+    out
 }
 
 /// The cloth's unique edges with their rest lengths: from the rest (u, v) coordinates for grid
@@ -171,6 +176,20 @@ pub fn max_stretch(x: &[Vec3], edges: &[(u32, u32, f64)]) -> (f64, (u32, u32)) {
         .fold((0.0, (0, 0)), |m, s| if s.0 > m.0 { s } else { m })
 }
 
+/// Largest edge length over rest among edges with a free end.
+pub fn free_stretch(sim: &Simulation, edges: &[(u32, u32, f64)]) -> f64 {
+    let mut kinematic = vec![false; sim.cloth.x.len()];
+    for (i, _) in &sim.cloth.kinematic {
+        kinematic[*i as usize] = true;
+    }
+    let free: Vec<_> = edges
+        .iter()
+        .filter(|e| !(kinematic[e.0 as usize] && kinematic[e.1 as usize]))
+        .copied()
+        .collect();
+    max_stretch(&sim.cloth.x, &free).0
+}
+
 /// Largest distance of a pinned or attached vertex from its target (m).
 pub fn attached_drift(sim: &Simulation) -> f64 {
     sim.cloth
@@ -200,6 +219,9 @@ pub struct Judged {
     pub first_intersecting_frame: Option<usize>,
     pub max_stretch: f64,
     pub max_stretch_at: f64,
+    /// As `max_stretch`, over edges with at least one free end: an edge between two attached
+    /// vertices is stretched by the robot's motion alone.
+    pub max_free_stretch: f64,
     pub max_drift: f64,
     pub max_speed: f64,
     pub unresolved: usize,
@@ -244,7 +266,31 @@ pub fn run(scene: &Scene, seconds: f64) -> Judged {
             }
         }
         j.frames = f + 1;
-        let n = intersecting_pairs(&sim.cloth.x, &sim.cloth.triangles);
+        let list = intersecting_pair_list(&sim.cloth.x, &sim.cloth.triangles);
+        let n = list.len();
+        if trace && n > 0 {
+            // Which triangles, with how many kinematic corners each (a pair whose triangles are
+            // both driven by the robot is the scene's own motion).
+            let k = |t: u32| {
+                sim.cloth.triangles[t as usize]
+                    .iter()
+                    .filter(|&&v| sim.cloth.kinematic_of(v).is_some())
+                    .count()
+            };
+            let shown: Vec<_> = list
+                .iter()
+                .take(12)
+                .map(|&(a, b)| {
+                    (
+                        sim.cloth.triangles[a as usize],
+                        k(a),
+                        sim.cloth.triangles[b as usize],
+                        k(b),
+                    )
+                })
+                .collect();
+            eprintln!("  intersecting: {n} {shown:?}");
+        }
         if n > 0 && j.first_intersecting_frame.is_none() {
             j.first_intersecting_frame = Some(f);
         }
@@ -253,6 +299,7 @@ pub fn run(scene: &Scene, seconds: f64) -> Judged {
         if s > j.max_stretch {
             (j.max_stretch, j.max_stretch_at) = (s, sim.time());
         }
+        j.max_free_stretch = j.max_free_stretch.max(free_stretch(&sim, &edges));
         j.max_drift = j.max_drift.max(attached_drift(&sim));
     }
     j.simulated_s = sim.time();

@@ -24,16 +24,47 @@ impl Stencil {
     }
 
     /// Changes `r` by `d` (if any vertex can move), returning false otherwise.
+    ///
+    /// The minimal-energy distribution moves vertex k by `c_k w_k / M` times `d`: among free
+    /// vertices that follows their masses, but where kinematic vertices carry most of both sides'
+    /// weight, the free vertex of small weight `c` is thrown `d / c`. On robot_cape at 48x48 a
+    /// vertex beside the attached edge, 0.4 % of a triangle whose other corners were attached
+    /// (and met by an attached vertex), was thrown 3 m at 481 m/s by one CCD correction. So the
+    /// change is scaled by the free share of the freer side (1 when either side is all free,
+    /// which leaves every such pair's arithmetic as it was): the free vertices move as far as a
+    /// free side would. What that leaves of the pair is mostly the scene's motion, and is the
+    /// next pass's and the impact zones' (which move with kinematic vertices rigidly).
     pub fn apply(&self, x: &mut [Vec3], w: &[f64], d: Vec3) -> bool {
         let m = self.inv_mass(w);
         if m <= 0.0 {
             return false;
         }
+        let share = self.free_share(w);
+        let d = if share < 1.0 { d * share } else { d };
         for k in 0..self.len {
             let i = self.idx[k] as usize;
             x[i] += d * (self.c[k] * w[i] / m);
         }
         true
+    }
+
+    /// The larger of the two sides' free weight over its whole weight (`r`'s positive and
+    /// negative coefficients are its two sides: the vertex and the triangle, or the two edges).
+    pub fn free_share(&self, w: &[f64]) -> f64 {
+        let (mut free, mut all) = ([0.0; 2], [0.0; 2]);
+        for k in 0..self.len {
+            let (side, c) = if self.c[k] >= 0.0 {
+                (0, self.c[k])
+            } else {
+                (1, -self.c[k])
+            };
+            all[side] += c;
+            if w[self.idx[k] as usize] > 0.0 {
+                free[side] += c;
+            }
+        }
+        let share = |s: usize| if all[s] > 0.0 { free[s] / all[s] } else { 0.0 };
+        share(0).max(share(1))
     }
 
     /// Contact distance of the pair from the per-vertex thickness `th`.
