@@ -28,17 +28,10 @@ const KILL_AFTER: Duration = Duration::from_secs(10);
 mod tiny_scene;
 use tiny_scene::TINY_SCENE as SCENE;
 
-const ROBOT_SCENE: &str = r#"name: NAMEXYZ
-duration: 0.1
-effects: [gravity, stretch, shear]
-solver: { integrator: implicit, dt: 0.02 }
-cloths:
-  - name: sheet
-    grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 2] } }
-    pins: [ { region: top_left } ]
-robot:
-  urdf: pkg/urdf/robot.urdf
-"#;
+/// The tiny scene on the layout's robot (`Layout`: `scene/pkg/urdf/robot.urdf`).
+fn robot_scene() -> String {
+    tiny_scene::tiny_robot_scene("pkg/urdf/robot.urdf")
+}
 
 fn urdf(mesh: &str, extra: &str) -> String {
     format!(
@@ -96,7 +89,7 @@ impl Layout {
     }
     fn robot(&self, mesh: &str, extra: &str) -> PathBuf {
         self.write("scene/pkg/urdf/robot.urdf", urdf(mesh, extra));
-        self.scene(ROBOT_SCENE)
+        self.scene(&robot_scene())
     }
     fn fifo(&self, rel: &str) -> PathBuf {
         let p = self.path(rel);
@@ -453,7 +446,7 @@ fn deep_nesting_is_rejected_without_overflowing_the_stack() {
     let l = Layout::new();
     let deep = "<a>".repeat(100_000) + &"</a>".repeat(100_000);
     l.write("scene/pkg/urdf/robot.urdf", urdf("../meshes/m.stl", &deep));
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     let o = check(&scene);
     judge(
@@ -473,7 +466,7 @@ fn deep_nesting_is_rejected_without_overflowing_the_stack() {
             "<visual>".repeat(200_000)
         ),
     );
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     let o = check(&scene);
     judge(
@@ -631,7 +624,7 @@ fn fifos_never_block() {
 
     let l = Layout::new();
     l.fifo("scene/pkg/urdf/robot.urdf");
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     let o = check(&scene);
     judge(
@@ -724,7 +717,7 @@ fn devices_and_huge_files_are_not_read() {
     // URDF and mesh as /dev/zero links and as sparse files.
     let l = Layout::new();
     l.symlink(zero, "scene/pkg/urdf/robot.urdf");
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     let o = check(&scene);
     judge(
@@ -737,7 +730,7 @@ fn devices_and_huge_files_are_not_read() {
 
     let l = Layout::new();
     l.sparse("scene/pkg/urdf/robot.urdf", 1 << 32);
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     let o = check(&scene);
     judge(
@@ -927,7 +920,7 @@ fn overflowing_numbers_are_named_by_their_key() {
         "obstacles[0].motion.points[0].t",
     );
     let traj = with(
-        ROBOT_SCENE,
+        &robot_scene(),
         "urdf: pkg/urdf/robot.urdf",
         "urdf: pkg/urdf/robot.urdf\n  trajectory: { names: [j], points: [ { t: 0, positions: [1e300] } ] }",
     );
@@ -1115,7 +1108,7 @@ fn inside_the_rules_meshes_load() {
         "scene/pkg/urdf/robot.urdf",
         urdf("../../../outside/secret.stl", ""),
     );
-    let scene = l.scene(&format!("{ROBOT_SCENE}mesh_paths: [../outside]\n"));
+    let scene = l.scene(&format!("{}mesh_paths: [../outside]\n", robot_scene()));
     let before = l.hashes();
     let o = check(&scene);
     judge("allow-listed folder", &l, &before, &o, Expect::Ok);
@@ -1197,7 +1190,7 @@ fn valid_input_with_a_byte_order_mark_is_accepted() {
         "scene/pkg/urdf/robot.urdf",
         format!("\u{feff}{}", urdf("../meshes/m.stl", "")),
     );
-    let scene = l.scene(&format!("\u{feff}{ROBOT_SCENE}"));
+    let scene = l.scene(&format!("\u{feff}{}", robot_scene()));
     let before = l.hashes();
     judge("BOM URDF", &l, &before, &check(&scene), Expect::Ok);
 }
@@ -1212,7 +1205,7 @@ fn errors_name_the_file_and_say_what_is_wrong() {
             .replace("<robot", "<robt")
             .replace("</robot>", "</robt>"),
     );
-    let scene = l.scene(ROBOT_SCENE);
+    let scene = l.scene(&robot_scene());
     let before = l.hashes();
     judge(
         "<robt> root",

@@ -10,3 +10,9 @@ cloths:
     grid: { size: [0.2, 0.2], resolution: [4, 4], pose: { xyz: [0, 0, 1] } }
     pins: [ { region: top_left } ]
 "#;
+
+/// [`TINY_SCENE`] on a robot read from `urdf` (relative to the scene file).
+#[allow(dead_code)] // not every test binary that includes this file drives a robot
+pub fn tiny_robot_scene(urdf: &str) -> String {
+    format!("{TINY_SCENE}robot:\n  urdf: {urdf}\n")
+}
