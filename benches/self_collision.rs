@@ -6,7 +6,9 @@
 //! 12 ms, per step at 64x64, resp. 128x128), with the exact counts (candidate pairs, repulsions,
 //! CCD passes and hits, impact zones and the largest zone's vertices) per step.
 //!
-//! `cargo bench --bench self_collision`; run it on an idle machine.
+//! `cargo bench --bench self_collision`; run it on an idle machine. `SELFCOL_BENCH_SCENES=a.yaml,b.yaml`
+//! keeps those scenes of the table (`none`: none), `SELFCOL_BENCH_CRUMPLE=64` those crumple
+//! resolutions (`none`: none).
 
 #[path = "../tests/common/self_check.rs"]
 mod self_check;
@@ -78,7 +80,14 @@ fn main() {
         .unwrap_or(1.0);
     println!("scene: ms/frame with self-collision, without, ratio (target <= 2)");
     let mut worst: f64 = 0.0;
-    for name in SCENES {
+    let list = |key: &str| std::env::var(key).ok().filter(|s| !s.is_empty());
+    let scenes = list("SELFCOL_BENCH_SCENES");
+    let keep = |name: &str| {
+        scenes
+            .as_deref()
+            .is_none_or(|l| l.split(',').any(|s| s == name))
+    };
+    for name in SCENES.iter().filter(|n| keep(n)) {
         let mut on = bundled(name, 1);
         // The stage's own exact intersection count (crumple.yaml has it on) is a metric, not
         // part of the self-collision cost.
@@ -96,7 +105,16 @@ fn main() {
         );
     }
     println!("largest ratio: {worst:.2}");
-    for (res, target) in [(64usize, 5.0), (128, 12.0)] {
+    let crumple = list("SELFCOL_BENCH_CRUMPLE");
+    let keep = |res: usize| {
+        crumple
+            .as_deref()
+            .is_none_or(|l| l.split(',').any(|s| s == res.to_string()))
+    };
+    for (res, target) in [(64usize, 5.0), (128, 12.0)]
+        .into_iter()
+        .filter(|r| keep(r.0))
+    {
         let mut on = bundled("crumple.yaml", 1);
         on.cloths[0].grid.resolution = [res, res];
         on.collision.count_self_intersections = false;

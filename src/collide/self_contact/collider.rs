@@ -5,6 +5,7 @@ use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
+use crate::Vec3;
 
 pub(crate) struct SelfCollider {
     pub(super) triangles: Vec<[u32; 3]>,
@@ -16,6 +17,8 @@ pub(crate) struct SelfCollider {
     pub(super) qboxes: Vec<Aabb>,
     pub(super) iboxes: Vec<Aabb>,
     pub(super) stamp: PairScratch,
+    /// The end positions in the frame of the cloth's mean motion (the CCD broad phase's).
+    pub(super) x_mean_frame: Vec<Vec3>,
     /// Per-candidate flags of a pass (vertex-triangle, edge-edge), reused.
     pub(super) flags: (Vec<u8>, Vec<u8>),
     pub(super) pairs: Vec<(u32, u32)>,
@@ -70,6 +73,7 @@ impl SelfCollider {
             qboxes: Vec::new(),
             iboxes: Vec::new(),
             stamp: PairScratch::default(),
+            x_mean_frame: Vec::new(),
             flags: (Vec::new(), Vec::new()),
             pairs: Vec::new(),
             pairs_ee: Vec::new(),

@@ -1,5 +1,11 @@
 //! Self-contact broad phase: candidate vertex-triangle and edge-edge (or vertex-vertex) pairs
-//! over swept boxes.
+//! over swept boxes, swept in the frame that moves with the cloth's mean motion.
+//!
+//! Whether two elements come within a distance during a step depends only on their relative
+//! motion, and a common translation `t u` of every vertex (`u` the mean motion over the step)
+//! changes no pair's separation at any time. So the boxes are swept from `x0` to `x1 - u`
+//! instead of to `x1`: the same pairs can collide, but where the cloth moves as a whole
+//! (falling, carried by a gripper) neighbours' boxes no longer overlap along the whole motion.
 
 use super::collider::{shares_vertex, SelfCollider};
 use super::exempt::across_seam;
@@ -31,6 +37,12 @@ impl SelfCollider {
         // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
         // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
+        let xb = if std::ptr::eq(xa.as_ptr(), xb.as_ptr()) {
+            xb
+        } else {
+            in_mean_frame(&mut self.x_mean_frame, &xa[..n], &xb[..n]);
+            &self.x_mean_frame[..]
+        };
         self.qboxes.clear();
         self.qboxes
             .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
@@ -124,4 +136,13 @@ impl SelfCollider {
         );
         self.report.candidates += self.pairs_ee.len();
     }
+}
+
+/// `out[i] = xb[i] - u`, `u` the mean of `xb - xa` (unchanged where that is not finite).
+fn in_mean_frame(out: &mut Vec<Vec3>, xa: &[Vec3], xb: &[Vec3]) {
+    let n = xa.len().max(1) as f64;
+    let u = xa.iter().zip(xb).map(|(a, b)| *b - *a).sum::<Vec3>() / n;
+    let u = if u.is_finite() { u } else { Vec3::ZERO };
+    out.clear();
+    out.extend(xb.iter().map(|b| *b - u));
 }
