@@ -70,6 +70,15 @@ fn per_step(c: &Cost) -> String {
     )
 }
 
+/// Whether `item` is in the comma-separated list of environment variable `key` (unset or empty:
+/// every item).
+fn chosen(key: &str, item: &str) -> bool {
+    match std::env::var(key) {
+        Ok(l) if !l.is_empty() => l.split(',').any(|s| s == item),
+        _ => true,
+    }
+}
+
 fn main() {
     if std::env::args().any(|a| a == "--list") {
         return;
@@ -80,14 +89,7 @@ fn main() {
         .unwrap_or(1.0);
     println!("scene: ms/frame with self-collision, without, ratio (target <= 2)");
     let mut worst: f64 = 0.0;
-    let list = |key: &str| std::env::var(key).ok().filter(|s| !s.is_empty());
-    let scenes = list("SELFCOL_BENCH_SCENES");
-    let keep = |name: &str| {
-        scenes
-            .as_deref()
-            .is_none_or(|l| l.split(',').any(|s| s == name))
-    };
-    for name in SCENES.iter().filter(|n| keep(n)) {
+    for name in SCENES.iter().filter(|n| chosen("SELFCOL_BENCH_SCENES", n)) {
         let mut on = bundled(name, 1);
         // The stage's own exact intersection count (crumple.yaml has it on) is a metric, not
         // part of the self-collision cost.
@@ -105,15 +107,9 @@ fn main() {
         );
     }
     println!("largest ratio: {worst:.2}");
-    let crumple = list("SELFCOL_BENCH_CRUMPLE");
-    let keep = |res: usize| {
-        crumple
-            .as_deref()
-            .is_none_or(|l| l.split(',').any(|s| s == res.to_string()))
-    };
     for (res, target) in [(64usize, 5.0), (128, 12.0)]
         .into_iter()
-        .filter(|r| keep(r.0))
+        .filter(|r| chosen("SELFCOL_BENCH_CRUMPLE", &r.0.to_string()))
     {
         let mut on = bundled("crumple.yaml", 1);
         on.cloths[0].grid.resolution = [res, res];

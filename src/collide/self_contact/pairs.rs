@@ -37,12 +37,10 @@ impl SelfCollider {
         // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
         // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
-        let xb = if std::ptr::eq(xa.as_ptr(), xb.as_ptr()) {
-            xb
-        } else {
-            in_mean_frame(&mut self.x_mean_frame, &xa[..n], &xb[..n]);
-            &self.x_mean_frame[..]
-        };
+        // At rest positions (xa == xb, the proximity passes) the mean motion is zero and this
+        // is a copy.
+        in_mean_frame(&mut self.x_mean_frame, &xa[..n], &xb[..n]);
+        let xb = &self.x_mean_frame[..];
         self.qboxes.clear();
         self.qboxes
             .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
