@@ -73,7 +73,8 @@ const CASES: &[Case] = &[
 ];
 
 const EXPECTED: &[(&str, u64)] = &[
-    ("crumple16_self", 0xe7d6f4ed089e49e8),
+    // Re-recorded when far vertex-triangle repulsion took the face normal and pushes were capped.
+    ("crumple16_self", 0x26a2ecfcc3e720c9),
     ("chair16_edges", 0xf28854857632d31e),
     ("pick12_robot", 0x1b452164fe1dc6e0),
     ("sphere16_projection", 0xfadc50a365b3a77e),

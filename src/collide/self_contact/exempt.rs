@@ -177,6 +177,8 @@ impl SelfCollider {
             }
             rest.ee.push(&mut row);
         }
+        rest.x = x.to_vec();
+        rest.max_edge = max_edge;
         self.rest = Some(rest);
     }
 

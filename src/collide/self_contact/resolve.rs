@@ -47,7 +47,7 @@ impl SelfCollider {
         match settings.mode {
             DetectionMode::Spheres => {
                 for _ in 0..iters {
-                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, true, false) == 0 {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, true, false) == 0 {
                         break;
                     }
                 }
@@ -55,14 +55,14 @@ impl SelfCollider {
             }
             DetectionMode::Proximity => {
                 for _ in 0..iters {
-                    if self.repulsion_pass(x0, x1, v1, thickness, friction, h, false, true) == 0 {
+                    if self.repulsion_pass(x0, x1, v1, thickness, friction, false, true) == 0 {
                         break;
                     }
                 }
                 self.outcome(0)
             }
             DetectionMode::Continuous => {
-                self.repulsion_pass(x0, x1, v1, thickness, friction, h, false, false);
+                self.repulsion_pass(x0, x1, v1, thickness, friction, false, false);
                 let mut clean = false;
                 for _ in 0..iters {
                     if self.ccd_pass(x0, x1, v1, thickness, true) == 0 {

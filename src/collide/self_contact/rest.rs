@@ -40,6 +40,10 @@ impl Csr {
 /// per edge its edges.
 #[derive(Default)]
 pub(super) struct RestShape {
+    /// The positions the lists were built from.
+    pub x: Vec<crate::Vec3>,
+    /// The longest edge there (m).
+    pub max_edge: f64,
     pub vt: Csr,
     pub vv: Csr,
     pub ee: Csr,
@@ -49,5 +53,13 @@ impl RestShape {
     /// Rest-close pairs: vertex-triangle plus edge-edge (each edge pair once).
     pub fn pairs(&self) -> usize {
         self.vt.len() + self.ee.len() / 2
+    }
+
+    /// The pair's separation in the rest shape (infinite where its vertices are not in it).
+    pub(super) fn distance(&self, st: &super::stencil::Stencil) -> f64 {
+        if st.idx[..st.len].iter().any(|&i| i as usize >= self.x.len()) {
+            return f64::INFINITY;
+        }
+        st.eval(&self.x).length()
     }
 }
