@@ -104,17 +104,8 @@ impl SelfCollider {
                 c: [1.0, -1.0, 0.0, 0.0],
                 len: 2,
             };
-            let r = st.eval(x);
-            let d = r.length();
-            if d >= st.gap(th) {
-                return None;
-            }
-            let n = if d > 0.0 {
-                r / d
-            } else {
-                st.eval(x0).normalize_or_zero()
-            };
-            return (n != Vec3::ZERO && n.dot(st.eval(x0)) >= 0.0).then_some((st, n, st.gap(th)));
+            let gap = st.gap(th);
+            return radial(st.eval(x), st.eval(x0), gap).map(|n| (st, n, gap));
         }
         let t = self.triangles[b as usize];
         let [pa, pb, pc] = t.map(|i| x[i as usize]);
@@ -130,22 +121,12 @@ impl SelfCollider {
             // that holds two layers `gap` apart is at least pi/2 gap long), or one edge apart
             // (the triangle touches the vertex's 1-ring: no vertex between them to fold at), so
             // their closeness is the sheet squeezed in its own plane, which the in-surface
-            // direction of the closest point undoes. The face normal there pushed the vertex out of its own
-            // sheet: through the sheet under it in `tests/collide_self.rs`, to 150 m/s in the
-            // gripper of robot_pick_towel. Skipping these pairs let the 2x crumple stretch to
-            // 1.67. Nor is such a pair held farther apart than it is at rest.
+            // direction of the closest point undoes. The face normal there pushed the vertex
+            // out of its own sheet: through the sheet under it in `tests/collide_self.rs`, to
+            // 150 m/s in the gripper of robot_pick_towel. Skipping these pairs let the 2x
+            // crumple stretch to 1.67. Nor is such a pair held farther apart than it is at rest.
             let gap = st.gap(th).min(rest_d);
-            let r = p - q;
-            let d = r.length();
-            if d >= gap {
-                return None;
-            }
-            let n = if d > 0.0 {
-                r / d
-            } else {
-                st.eval(x0).normalize_or_zero()
-            };
-            return (n != Vec3::ZERO && n.dot(st.eval(x0)) >= 0.0).then_some((st, n, gap));
+            return radial(p - q, st.eval(x0), gap).map(|n| (st, n, gap));
         }
         let (e0, e1, e2) = (pb - pa, pc - pa, pc - pb);
         let max_edge2 = e0
@@ -211,22 +192,8 @@ impl SelfCollider {
             x[b[1] as usize],
         );
         let st = self.ee_stencil(e1, e2, s, u);
-        let r = st.eval(x);
-        let d = r.length();
-        if d >= st.gap(th) {
-            return None;
-        }
-        let r0 = st.eval(x0);
-        let n = if d > 0.0 {
-            r / d
-        } else {
-            r0.normalize_or_zero()
-        };
-        // Seen from the start of the step the pair is on the other side: either it crossed
-        // (CCD's case, with the crossing's own normal) or its closest feature changed. Pushed
-        // here by `gap + d` through the other element, it went 26 m/s where robot_cape's
-        // attachments squeeze the cloth between the torso and a shoulder.
-        (n != Vec3::ZERO && n.dot(r0) >= 0.0).then_some((st, n, st.gap(th)))
+        let gap = st.gap(th);
+        radial(st.eval(x), st.eval(x0), gap).map(|n| (st, n, gap))
     }
 
     /// Separates a close pair to its contact distance `gap` along `n` (the side it started on),
@@ -270,4 +237,24 @@ impl SelfCollider {
         }
         true
     }
+}
+
+/// The direction `r` of a pair closer than `gap` (`r0` where `r` vanishes), when the pair is on
+/// the side it started on (`r0`, at the start of the step).
+///
+/// Seen from the start of the step on the other side, the pair either crossed (CCD's case, with
+/// the crossing's own normal) or its closest feature changed. Pushed here by `gap + d` through
+/// the other element, it went 26 m/s where robot_cape's attachments squeeze the cloth between
+/// the torso and a shoulder.
+fn radial(r: Vec3, r0: Vec3, gap: f64) -> Option<Vec3> {
+    let d = r.length();
+    if d >= gap {
+        return None;
+    }
+    let n = if d > 0.0 {
+        r / d
+    } else {
+        r0.normalize_or_zero()
+    };
+    (n != Vec3::ZERO && n.dot(r0) >= 0.0).then_some(n)
 }
