@@ -28,6 +28,11 @@ pub struct CollisionStage {
     pub(super) candidates: Vec<usize>,
     /// Per-vertex "touches an obstacle" flags, for cloth-cloth mass weighting.
     pub(super) in_contact: Vec<bool>,
+    /// The end positions before cloth-cloth contact and at the last pass of it or of its
+    /// obstacle re-test, and per vertex whether cloth-cloth contact moved it (reused).
+    pub(super) before_self: Vec<Vec3>,
+    pub(super) round_start: Vec<Vec3>,
+    pub(super) self_moved: Vec<bool>,
     pub(super) self_collider: Option<SelfCollider>,
     /// Per-obstacle edge/corner features and the cloth topology they are tested against.
     pub(super) features: Vec<Features>,
@@ -99,6 +104,9 @@ impl CollisionStage {
             order: Vec::new(),
             candidates: Vec::new(),
             in_contact: vec![false; n_vertices],
+            before_self: Vec::new(),
+            round_start: Vec::new(),
+            self_moved: Vec::new(),
             self_collider,
             culling: true,
             near: Vec::new(),

@@ -18,6 +18,8 @@ pub struct SelfContactReport {
     /// Impact zones formed by the fail-safe, and the vertices of the largest.
     pub zones: usize,
     pub largest_zone: usize,
+    /// Cloth-cloth passes run again because the first moved vertices into an obstacle.
+    pub obstacle_retests: usize,
 }
 
 impl SelfContactReport {
@@ -30,5 +32,6 @@ impl SelfContactReport {
         self.ccd_hits += o.ccd_hits;
         self.zones += o.zones;
         self.largest_zone = self.largest_zone.max(o.largest_zone);
+        self.obstacle_retests += o.obstacle_retests;
     }
 }

@@ -28,6 +28,7 @@ impl SelfCollider {
         friction: &[f64],
         in_contact: &[bool],
         h: f64,
+        first: bool,
     ) -> SelfOutcome {
         let n = x0.len().min(x1.len()).min(inv_mass.len());
         self.report = SelfContactReport::default();
@@ -43,7 +44,11 @@ impl SelfCollider {
                 inv_mass[i]
             }
         }));
-        let iters = settings.self_iterations.max(1);
+        let iters = if first || settings.mode == DetectionMode::Continuous {
+            settings.self_iterations.max(1)
+        } else {
+            1
+        };
         match settings.mode {
             DetectionMode::Spheres => {
                 for _ in 0..iters {
@@ -62,7 +67,9 @@ impl SelfCollider {
                 self.outcome(0)
             }
             DetectionMode::Continuous => {
-                self.repulsion_pass(x0, x1, v1, thickness, friction, false, false);
+                if first {
+                    self.repulsion_pass(x0, x1, v1, thickness, friction, false, false);
+                }
                 let mut clean = false;
                 for _ in 0..iters {
                     if self.ccd_pass(x0, x1, v1, thickness, true) == 0 {
