@@ -197,6 +197,9 @@ fn scene_for(res: usize) -> Scene {
     let root = env!("CARGO_MANIFEST_DIR");
     let mut scene = Scene::load(format!("{root}/config/robot_towel.yaml").as_ref()).unwrap();
     scene.cloths[0].grid.resolution = [res, res];
+    // What `drape node` runs the scene with (the direct rows do not go through it).
+    let levels = &mut scene.solver.guard.max_contact_split_levels;
+    levels.get_or_insert(NodeParams::default().max_contact_split_levels);
     if let Some(r) = scene.robot.as_mut() {
         r.urdf = format!("{root}/urdf/drape_bot.urdf");
     }

@@ -538,3 +538,46 @@ fn a_2_mm_plate_pushes_the_sheet_without_passing_it() {
         accept(&c, true);
     }
 }
+
+/// The split levels a live node bounds fast contact with (`solver.guard.max_contact_split_levels`,
+/// node parameter `max_contact_split_levels`): a 20 m/s rod through the CI sheet splits each
+/// substep at most once at one level, and the substeps that would have split further are
+/// counted (on `/diagnostics` as `contact_splits_refused`), not silent; unbounded, none is.
+#[test]
+fn split_levels_bound_the_substeps_and_count_what_they_refused() {
+    let c = Case {
+        sheet: ci_sheet(Pins::Free),
+        link: Link::Capsule(0.0025),
+        speed: 20.0,
+        angle: 0.0,
+        frames: 9,
+    };
+    let run_with = |levels: Option<u32>| {
+        let mut scene = Scene::from_yaml(&yaml(&c), "fast_link").unwrap_or_else(|e| panic!("{e}"));
+        scene.solver.guard.max_contact_split_levels = levels;
+        let n_sub = scene.solver.substeps;
+        let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
+        let (mut splits, mut refused) = (0, 0);
+        for f in 0..c.frames {
+            let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
+            splits += m.contact_splits;
+            refused += m.contact_splits_refused;
+            if let Some(l) = levels {
+                assert!(
+                    m.contact_splits <= n_sub * ((1 << l) - 1),
+                    "frame {f}: {} splits at {l} level(s)",
+                    m.contact_splits
+                );
+            }
+            assert!(sim.cloth.x.iter().all(|p| p.is_finite()));
+        }
+        (splits, refused)
+    };
+    let (free_splits, free_refused) = run_with(None);
+    let (splits, refused) = run_with(Some(1));
+    assert_eq!(free_refused, 0, "nothing refused without a bound");
+    assert!(
+        free_splits > splits && refused > 0,
+        "unbounded {free_splits} splits; bounded {splits}, {refused} refused"
+    );
+}

@@ -70,6 +70,7 @@ fn every_frame_has_its_telemetry_and_the_summary_matches() {
             "substeps",
             "subdivisions",
             "contact_splits",
+            "contact_splits_refused",
             "cg_iterations",
             "cg_residual_max",
             "contacts",

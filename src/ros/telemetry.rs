@@ -25,6 +25,8 @@ pub struct FrameQuality {
     pub subdivisions: u64,
     /// Substeps split where a link moved fast relative to the cloth near it.
     pub contact_splits: u64,
+    /// Substeps where a link still outran the cloth past the split levels allowed.
+    pub contact_splits_refused: u64,
     pub cg_iterations: u64,
     /// Most CG iterations of one step.
     pub cg_iterations_max: u32,
@@ -50,6 +52,7 @@ impl FrameQuality {
         self.substeps += u64::from(m.substeps);
         self.subdivisions += u64::from(m.subdivisions);
         self.contact_splits += u64::from(m.contact_splits);
+        self.contact_splits_refused += u64::from(m.contact_splits_refused);
         self.cg_iterations += u64::from(m.cg_iterations);
         self.cg_iterations_max = self.cg_iterations_max.max(m.cg_iterations);
         self.cg_residual_max = self.cg_residual_max.max(m.cg_residual_max);
@@ -77,6 +80,15 @@ impl FrameQuality {
                 DiagnosticStatus::WARN,
                 format!("{} unresolved cloth contacts", self.unresolved_contacts),
             )
+        } else if self.contact_splits_refused > 0 {
+            (
+                DiagnosticStatus::WARN,
+                format!(
+                    "{} substeps answered a fast link coarser than fast contact asks \
+                     (solver.guard.max_contact_split_levels)",
+                    self.contact_splits_refused
+                ),
+            )
         } else if self.subdivisions > 0 {
             (
                 DiagnosticStatus::WARN,
@@ -96,6 +108,10 @@ impl FrameQuality {
             kv("substeps", self.substeps.to_string()),
             kv("subdivisions", self.subdivisions.to_string()),
             kv("contact_splits", self.contact_splits.to_string()),
+            kv(
+                "contact_splits_refused",
+                self.contact_splits_refused.to_string(),
+            ),
             kv("cg_iterations", self.cg_iterations.to_string()),
             kv("cg_iterations_max", self.cg_iterations_max.to_string()),
             kv("cg_residual_max", self.cg_residual_max.to_string()),

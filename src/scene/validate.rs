@@ -266,6 +266,9 @@ impl Scene {
             0,
             20,
         )?;
+        if let Some(l) = s.guard.max_contact_split_levels {
+            count("solver.guard.max_contact_split_levels", l as u64, 0, 20)?;
+        }
         Ok(())
     }
 

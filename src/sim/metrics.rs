@@ -14,6 +14,10 @@ pub struct StepMetrics {
     /// Substeps split in two because an obstacle moved fast relative to the cloth near it (see
     /// `sim::fast`): the contact is resolved in steps the collision stage can follow.
     pub contact_splits: u32,
+    /// Substeps in which an obstacle still outran the cloth but the guard's
+    /// `max_contact_split_levels` allowed no further split: the contact was answered coarser
+    /// than fast contact asks (see `sim::fast`).
+    pub contact_splits_refused: u32,
     pub force_evaluations: u32,
     pub cg_iterations: u32,
     pub cg_residual_max: f64,

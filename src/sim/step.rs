@@ -104,7 +104,10 @@ impl Simulation {
                 m.contact_splits += 1;
                 return self.halves(t, h, (s0, s1), depth, m);
             }
-            Ok(speed) => speed,
+            Ok((speed, refused)) => {
+                m.contact_splits_refused += u32::from(refused);
+                speed
+            }
         };
         let book = self.guard.book();
         self.kinematic_targets(h, s0, s1);
@@ -176,21 +179,29 @@ impl Simulation {
     }
 
     /// Stage 0: whether a moving obstacle outruns the cloth near it over this substep (see
-    /// [`fast`]): `Err` asks for a split (within the guard's levels of halving), `Ok` gives the
-    /// fastest obstacle point's speed (m/s) for the strain bound. Static obstacles cost nothing.
+    /// [`fast`]): `Err` asks for a split (within the guard's levels of halving and of fast
+    /// contact), `Ok` gives the fastest obstacle point's speed (m/s) for the strain bound, and
+    /// whether a split was wanted that `max_contact_split_levels` refused. Static obstacles
+    /// cost nothing.
     fn fast_contact(
         &mut self,
         t: f64,
         h: f64,
         (s0, s1): (f64, f64),
         depth: u32,
-    ) -> Result<f64, ()> {
+    ) -> Result<(f64, bool), ()> {
         let Some(stage) = self.collision.as_ref().filter(|_| !self.guard.fast_off) else {
-            return Ok(0.0);
+            return Ok((0.0, false));
         };
-        let may_split = depth < self.settings.guard.max_subdivisions;
+        let g = self.settings.guard;
+        let levels = g
+            .max_contact_split_levels
+            .map_or(g.max_subdivisions, |l| l.min(g.max_subdivisions));
+        let may_split = depth < levels;
+        // At the budget's depth (not the guard's) the test still runs, to count the refusal.
+        let test = may_split || depth < g.max_subdivisions;
         let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
-        let mut top: f64 = 0.0;
+        let (mut top, mut refused) = (0.0f64, false);
         for (k, o) in stage.obstacles().iter().enumerate() {
             let target = targets.get(k).and_then(Option::as_ref);
             let poses = fast::substep_poses(o, target, (t, h), (s0, s1));
@@ -198,17 +209,21 @@ impl Simulation {
                 continue;
             }
             top = top.max(fast::top_speed(o, poses, h));
-            if !may_split {
+            if !test || refused {
                 continue;
             }
             let strain = self.guard.strain_model(cloth, &self.model.effects);
             let th = cloth.thickness.iter().copied().fold(0.0, f64::max);
             let pad = th + fast::REACH_RINGS * strain.max_spacing();
             if fast::outruns(o, poses, cloth, h, pad, |i| strain.spacing(i)) {
+                if !may_split {
+                    refused = true;
+                    continue;
+                }
                 return Err(());
             }
         }
-        Ok(top)
+        Ok((top, refused))
     }
 
     /// Whether the substep is over the integrator's stability limit (see

@@ -196,7 +196,9 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         Some(d) => d,
         None => Distro::from_env()?,
     };
-    let scene = Scene::load(&params.scene)?;
+    let mut scene = Scene::load(&params.scene)?;
+    let levels = &mut scene.solver.guard.max_contact_split_levels;
+    levels.get_or_insert(params.max_contact_split_levels);
     let net = Network::from_env()?;
     let wall = WallClock::new();
     let cfg = LoopConfig {

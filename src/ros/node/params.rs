@@ -86,6 +86,10 @@ pub struct NodeParams {
     pub paused: bool,
     /// Steps the simulation may be behind before the backlog is dropped.
     pub max_backlog_steps: u32,
+    /// Levels of halving fast contact may use per substep when the scene sets none
+    /// (`solver.guard.max_contact_split_levels`): a jump of the arm otherwise splits one frame
+    /// into as many substeps as the link's motion has thirds of a cloth spacing.
+    pub max_contact_split_levels: u32,
     /// Lower an implicit scene's quality to hold real time (see [`super::quality`]).
     pub adaptive_quality: bool,
     /// How low (`quality.min_substeps`, `quality.max_cg_tolerance`,
@@ -111,6 +115,7 @@ impl Default for NodeParams {
             use_sim_time: false,
             paused: false,
             max_backlog_steps: 6,
+            max_contact_split_levels: 2,
             adaptive_quality: true,
             quality: QualityBounds::default(),
             service_wire: ServiceWire::Enhanced,
@@ -318,6 +323,7 @@ impl NodeParams {
             }
             "quality.levels" => self.quality.levels = integer(v, 2, 64)?,
             "max_backlog_steps" => self.max_backlog_steps = integer(v, 1, 1000)?,
+            "max_contact_split_levels" => self.max_contact_split_levels = integer(v, 0, 20)?,
             "service_mapping" => {
                 self.service_wire = match string(v)?.to_ascii_lowercase().as_str() {
                     "enhanced" | "fastdds" | "fastrtps" => ServiceWire::Enhanced,
