@@ -8,7 +8,7 @@ use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
 use super::report::CollisionReport;
-use super::self_contact::SelfCollider;
+use super::self_contact::{SelfCollider, SelfOutcome};
 use super::stage::CollisionStage;
 use super::wedge::separate_wedged;
 use crate::{Pose, Vec3};
@@ -97,9 +97,7 @@ impl CollisionStage {
             // A face pushed off a feature can carry a vertex into the obstacle's faces: test the
             // moved vertices again, keeping the latest contact per (obstacle, vertex).
             self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, Some(&moved));
-            self.contacts.sort_by_key(|c| (c.obstacle, c.vertex));
-            self.contacts.reverse();
-            self.contacts.dedup_by_key(|c| (c.obstacle, c.vertex));
+            self.keep_latest_contacts();
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
@@ -170,18 +168,7 @@ impl CollisionStage {
         let mut mark = std::mem::take(&mut self.round_start);
         mark.clone_from(&before);
         let mut moved = std::mem::take(&mut self.self_moved);
-        let mut out = sc.resolve(
-            &self.settings,
-            x0,
-            x1,
-            v1,
-            inv_mass,
-            &self.thickness,
-            &self.friction,
-            &self.in_contact,
-            h,
-            true,
-        );
+        let mut out = self.self_pass(sc, x0, x1, v1, inv_mass, h, true);
         for _ in 1..SELF_OBSTACLE_ROUNDS {
             moved.clear();
             moved.extend((0..n).map(|i| x1[i] != mark[i] && !self.in_contact[i]));
@@ -191,26 +178,23 @@ impl CollisionStage {
             mark.clear();
             mark.extend_from_slice(&x1[..n]);
             self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, Some(&moved));
-            self.contacts.sort_by_key(|c| (c.obstacle, c.vertex));
-            self.contacts.reverse();
-            self.contacts.dedup_by_key(|c| (c.obstacle, c.vertex));
-            if (0..n).all(|i| x1[i] == mark[i]) {
+            self.keep_latest_contacts();
+            // Only the re-tested vertices can have moved: bring the mark up to date on them.
+            let mut pushed = false;
+            for ((m, &x), _) in mark
+                .iter_mut()
+                .zip(&x1[..n])
+                .zip(&moved)
+                .filter(|(_, &mv)| mv)
+            {
+                if *m != x {
+                    (*m, pushed) = (x, true);
+                }
+            }
+            if !pushed {
                 break;
             }
-            mark.clear();
-            mark.extend_from_slice(&x1[..n]);
-            let again = sc.resolve(
-                &self.settings,
-                x0,
-                x1,
-                v1,
-                inv_mass,
-                &self.thickness,
-                &self.friction,
-                &self.in_contact,
-                h,
-                false,
-            );
+            let again = self.self_pass(sc, x0, x1, v1, inv_mass, h, false);
             out.report.add(&again.report);
             out.report.obstacle_retests += 1;
             out.unresolved = again.unresolved;
@@ -221,6 +205,41 @@ impl CollisionStage {
         (self.self_moved, self.before_self, self.round_start) = (moved, before, mark);
         report.unresolved = out.unresolved;
         report.self_contact = out.report;
+    }
+}
+
+impl CollisionStage {
+    /// One cloth-cloth pass over the stage's per-vertex data (`first`: with its repulsion).
+    #[allow(clippy::too_many_arguments)]
+    fn self_pass(
+        &self,
+        sc: &mut SelfCollider,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        inv_mass: &[f64],
+        h: f64,
+        first: bool,
+    ) -> SelfOutcome {
+        sc.resolve(
+            &self.settings,
+            x0,
+            x1,
+            v1,
+            inv_mass,
+            &self.thickness,
+            &self.friction,
+            &self.in_contact,
+            h,
+            first,
+        )
+    }
+
+    /// After a re-test by the vertex pass: one contact per (obstacle, vertex), the latest.
+    fn keep_latest_contacts(&mut self) {
+        self.contacts.sort_by_key(|c| (c.obstacle, c.vertex));
+        self.contacts.reverse();
+        self.contacts.dedup_by_key(|c| (c.obstacle, c.vertex));
     }
 }
 

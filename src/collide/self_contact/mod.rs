@@ -28,3 +28,4 @@ mod zones;
 
 pub(crate) use collider::SelfCollider;
 pub use report::SelfContactReport;
+pub(crate) use resolve::SelfOutcome;
