@@ -1,6 +1,7 @@
 //! The self-contact collider: the cloth's triangles, edges and 1-ring, the scratch buffers of
 //! the passes, and the stencils of its pairs.
 
+use super::bvh::TopologyBvh;
 use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
@@ -14,6 +15,8 @@ pub(crate) struct SelfCollider {
     pub(super) nbr_start: Vec<u32>,
     pub(super) nbr: Vec<u32>,
     pub(super) hash: SpatialHash,
+    /// The vertex-triangle and edge-edge broad phase (built on the first state it sees).
+    pub(super) bvh: Option<TopologyBvh>,
     pub(super) qboxes: Vec<Aabb>,
     pub(super) iboxes: Vec<Aabb>,
     pub(super) stamp: PairScratch,
@@ -70,6 +73,7 @@ impl SelfCollider {
             nbr_start: deg,
             nbr,
             hash: SpatialHash::default(),
+            bvh: None,
             qboxes: Vec::new(),
             iboxes: Vec::new(),
             stamp: PairScratch::default(),

@@ -15,62 +15,70 @@
 //! a bit are skipped by every self-contact query until the weld makes them one piece.
 
 use super::collider::{shares_vertex, SelfCollider};
+use super::proximity::FOLD_ARC;
 use super::rest::RestShape;
 use crate::collide::narrow;
 use crate::Vec3;
+use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-/// Vertices within mesh (graph) distance `radius` of each vertex over the edges at `x`, as CSR.
+/// Vertices within mesh (graph) distance `radius` of each vertex over the edges at `x`, as CSR
+/// (each row sorted). Sources run in parallel, each a Dijkstra search cut at its radius.
 fn neighbourhoods(
     nbr_start: &[u32],
     nbr: &[u32],
     x: &[Vec3],
-    radius: impl Fn(usize) -> f64,
+    radius: impl Fn(usize) -> f64 + Sync,
 ) -> (Vec<u32>, Vec<u32>) {
     let n = x.len();
-    let mut start = Vec::with_capacity(n + 1);
-    let mut near = Vec::new();
-    let mut dist = vec![f64::INFINITY; n];
-    let mut touched = Vec::new();
-    let mut heap = BinaryHeap::new();
-    let mut seg = Vec::new();
-    start.push(0);
-    for s in 0..n {
-        let r = radius(s);
-        seg.clear();
-        dist[s] = 0.0;
-        touched.push(s);
-        heap.push(Reverse((0u64, s as u32)));
-        while let Some(Reverse((dbits, v))) = heap.pop() {
-            let d = f64::from_bits(dbits);
-            if d > dist[v as usize] {
-                continue;
-            }
-            seg.push(v);
-            let (a, b) = (
-                nbr_start[v as usize] as usize,
-                nbr_start[v as usize + 1] as usize,
-            );
-            for &w in &nbr[a..b] {
-                let dw = d + (x[w as usize] - x[v as usize]).length();
-                if dw <= r && dw < dist[w as usize] {
-                    if dist[w as usize].is_infinite() {
-                        touched.push(w as usize);
+    let rows: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map_init(
+            || (vec![f64::INFINITY; n], Vec::new(), BinaryHeap::new()),
+            |(dist, touched, heap), s| {
+                let r = radius(s);
+                let mut seg = Vec::new();
+                dist[s] = 0.0;
+                touched.push(s);
+                heap.push(Reverse((0u64, s as u32)));
+                while let Some(Reverse((dbits, v))) = heap.pop() {
+                    let d = f64::from_bits(dbits);
+                    if d > dist[v as usize] {
+                        continue;
                     }
-                    dist[w as usize] = dw;
-                    // Non-negative f64 order equals its bit pattern's order.
-                    heap.push(Reverse((dw.to_bits(), w)));
+                    seg.push(v);
+                    let (a, b) = (
+                        nbr_start[v as usize] as usize,
+                        nbr_start[v as usize + 1] as usize,
+                    );
+                    for &w in &nbr[a..b] {
+                        let dw = d + (x[w as usize] - x[v as usize]).length();
+                        if dw <= r && dw < dist[w as usize] {
+                            if dist[w as usize].is_infinite() {
+                                touched.push(w as usize);
+                            }
+                            dist[w as usize] = dw;
+                            // Non-negative f64 order equals its bit pattern's order.
+                            heap.push(Reverse((dw.to_bits(), w)));
+                        }
+                    }
                 }
-            }
-        }
-        seg.sort_unstable();
-        seg.dedup();
-        near.extend_from_slice(&seg);
-        for &t in &touched {
-            dist[t] = f64::INFINITY;
-        }
-        touched.clear();
+                seg.sort_unstable();
+                seg.dedup();
+                for &t in touched.iter() {
+                    dist[t] = f64::INFINITY;
+                }
+                touched.clear();
+                seg
+            },
+        )
+        .collect();
+    let mut start = Vec::with_capacity(n + 1);
+    let mut near = Vec::with_capacity(rows.iter().map(Vec::len).sum());
+    start.push(0);
+    for row in rows {
+        near.extend_from_slice(&row);
         start.push(near.len() as u32);
     }
     (start, near)
@@ -105,8 +113,9 @@ impl SelfCollider {
         // A pair's gap is at most 2 max_th; the nearest vertex of the other element is at most
         // one edge farther than the pair's rest distance, and a mesh path is at most sqrt(2)
         // longer than the straight line on a triangulated grid (1.5 with margin).
+        // (FOLD_ARC times that for the pairs proximity answers in the cloth's plane.)
         let (start, near) = neighbourhoods(&self.nbr_start, &self.nbr, x, |_| {
-            1.5 * (2.0 * max_th + max_edge)
+            1.5 * (FOLD_ARC * 2.0 * max_th + max_edge)
         });
         let near = |v: usize| &near[start[v] as usize..start[v + 1] as usize];
         // Vertex -> incident triangles and edges.
@@ -133,49 +142,86 @@ impl SelfCollider {
         let edges3: Vec<[u32; 3]> = self.edges.iter().map(|e| [e[0], e[1], 0]).collect();
         let (ts, ti) = incident(&self.triangles, 3);
         let (es, ei) = incident(&edges3, 2);
+        // Rows in parallel; each element is tested once per row (a stamp per thread), not once
+        // per incident vertex of the neighbourhood.
+        let (tris, edges) = (&self.triangles, &self.edges);
+        let vt_rows: Vec<[Vec<u32>; 3]> = (0..n)
+            .into_par_iter()
+            .map_init(
+                || vec![u32::MAX; tris.len()],
+                |stamp, p| {
+                    let (mut row, mut row_v, mut row_near) = (Vec::new(), Vec::new(), Vec::new());
+                    for &q in near(p) {
+                        let q = q as usize;
+                        let ring = self.adjacent(p as u32, q as u32);
+                        for &t in &ti[ts[q] as usize..ts[q + 1] as usize] {
+                            let tri = tris[t as usize];
+                            // A triangle met first from a non-ring vertex is met again from its
+                            // ring vertex when it has one: test it there (the ring decides).
+                            if tri.contains(&(p as u32)) || (stamp[t as usize] == p as u32 && !ring)
+                            {
+                                continue;
+                            }
+                            stamp[t as usize] = p as u32;
+                            let [a, b, c] = tri.map(|i| x[i as usize]);
+                            let (cp, _) = narrow::point_triangle_closest(x[p], a, b, c);
+                            let gap =
+                                th[p] + tri.map(|i| th[i as usize]).into_iter().fold(0.0, f64::max);
+                            let d = (cp - x[p]).length();
+                            if d < gap {
+                                row.push(t);
+                            } else if ring || d < FOLD_ARC * gap {
+                                row_near.push(t);
+                            }
+                        }
+                        if q != p && (x[q] - x[p]).length() < th[p] + th[q] {
+                            row_v.push(q as u32);
+                        }
+                    }
+                    [row, row_v, row_near]
+                },
+            )
+            .collect();
+        let ee_rows: Vec<[Vec<u32>; 2]> = edges
+            .par_iter()
+            .enumerate()
+            .map_init(
+                || vec![u32::MAX; edges.len()],
+                |stamp, (k, e)| {
+                    let (mut row, mut row_near) = (Vec::new(), Vec::new());
+                    let [a0, a1] = e.map(|i| i as usize);
+                    for &q in near(a0).iter().chain(near(a1)) {
+                        for &f in &ei[es[q as usize] as usize..es[q as usize + 1] as usize] {
+                            let g = edges[f as usize];
+                            if stamp[f as usize] == k as u32 || shares_vertex(e, &g) {
+                                continue;
+                            }
+                            stamp[f as usize] = k as u32;
+                            let [b0, b1] = g.map(|i| i as usize);
+                            let (_, _, ca, cb) =
+                                narrow::segment_segment_closest(x[a0], x[a1], x[b0], x[b1]);
+                            let gap = th[a0].max(th[a1]) + th[b0].max(th[b1]);
+                            let d = (ca - cb).length();
+                            if d < gap {
+                                row.push(f);
+                            } else if d < FOLD_ARC * gap {
+                                row_near.push(f);
+                            }
+                        }
+                    }
+                    [row, row_near]
+                },
+            )
+            .collect();
         let mut rest = RestShape::default();
-        let mut row = Vec::new();
-        let mut row_v = Vec::new();
-        for p in 0..n {
-            for &q in near(p) {
-                let q = q as usize;
-                for &t in &ti[ts[q] as usize..ts[q + 1] as usize] {
-                    let tri = self.triangles[t as usize];
-                    if tri.contains(&(p as u32)) {
-                        continue;
-                    }
-                    let [a, b, c] = tri.map(|i| x[i as usize]);
-                    let (cp, _) = narrow::point_triangle_closest(x[p], a, b, c);
-                    let gap = th[p] + tri.map(|i| th[i as usize]).into_iter().fold(0.0, f64::max);
-                    if (cp - x[p]).length() < gap {
-                        row.push(t);
-                    }
-                }
-                if q != p && (x[q] - x[p]).length() < th[p] + th[q] {
-                    row_v.push(q as u32);
-                }
-            }
+        for [mut row, mut row_v, mut row_near] in vt_rows {
             rest.vt.push(&mut row);
             rest.vv.push(&mut row_v);
+            rest.near_vt.push(&mut row_near);
         }
-        for e in &self.edges {
-            let [a0, a1] = e.map(|i| i as usize);
-            for &q in near(a0).iter().chain(near(a1)) {
-                for &f in &ei[es[q as usize] as usize..es[q as usize + 1] as usize] {
-                    let g = self.edges[f as usize];
-                    if shares_vertex(e, &g) {
-                        continue;
-                    }
-                    let [b0, b1] = g.map(|i| i as usize);
-                    let (_, _, ca, cb) =
-                        narrow::segment_segment_closest(x[a0], x[a1], x[b0], x[b1]);
-                    let gap = th[a0].max(th[a1]) + th[b0].max(th[b1]);
-                    if (ca - cb).length() < gap {
-                        row.push(f);
-                    }
-                }
-            }
+        for [mut row, mut row_near] in ee_rows {
             rest.ee.push(&mut row);
+            rest.near_ee.push(&mut row_near);
         }
         rest.x = x.to_vec();
         rest.max_edge = max_edge;

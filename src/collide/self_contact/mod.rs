@@ -10,10 +10,11 @@
 //! vertices (w = 0) never move.
 //!
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
-//! `pairs` (broad phase), `exempt` (pairs that are no contact: rest proximity, seams being
+//! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no contact: rest proximity, seams being
 //! sewn; `rest` holds the rest-close lists), one query per file (`proximity`, `ccd`, `intersections`), `zones` (the impact-zone
 //! fail-safe), `resolve` (their order per detection mode), `report` (its counts).
 
+mod bvh;
 mod ccd;
 mod collider;
 mod exempt;

@@ -7,11 +7,13 @@
 //! instead of to `x1`: the same pairs can collide, but where the cloth moves as a whole
 //! (falling, carried by a gripper) neighbours' boxes no longer overlap along the whole motion.
 
-use super::collider::{shares_vertex, SelfCollider};
+use super::bvh::TopologyBvh;
+use super::collider::SelfCollider;
 use super::exempt::across_seam;
 use super::rest::RestShape;
 use crate::collide::broad::{cell_size, collect_pairs, Aabb};
 use crate::Vec3;
+use rayon::prelude::*;
 
 impl SelfCollider {
     /// Candidate pairs over boxes of (x0 .. x1) inflated by per-element `margin`:
@@ -24,7 +26,7 @@ impl SelfCollider {
         &mut self,
         xa: &[Vec3],
         xb: &[Vec3],
-        margin: impl Fn(usize) -> f64,
+        margin: impl Fn(usize) -> f64 + Sync,
         vertex_vertex: bool,
         proximity: bool,
         with_edges: bool,
@@ -37,14 +39,16 @@ impl SelfCollider {
         // Only the query boxes are inflated by the contact distance (`margin`); item boxes are
         // the bare swept boxes, so no pair is found at more than the contact distance.
         let n = xa.len().min(xb.len());
+        // Proximity passes test the end positions alone (no motion to bound the normals over).
+        let swept = !std::ptr::eq(xa.as_ptr(), xb.as_ptr());
         // At rest positions (xa == xb, the proximity passes) the mean motion is zero and this
         // is a copy.
         in_mean_frame(&mut self.x_mean_frame, &xa[..n], &xb[..n]);
         let xb = &self.x_mean_frame[..];
-        self.qboxes.clear();
-        self.qboxes
-            .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
         if vertex_vertex {
+            self.qboxes.clear();
+            self.qboxes
+                .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], margin(i))));
             self.iboxes.clear();
             self.iboxes
                 .extend((0..n).map(|i| Aabb::from_points(&[xa[i], xb[i]], 0.0)));
@@ -76,63 +80,69 @@ impl SelfCollider {
             self.report.candidates += self.pairs.len();
             return;
         }
-        let tris = &self.triangles;
-        let bits = &self.seam_bits;
-        self.iboxes.clear();
-        self.iboxes.extend(tris.iter().map(|t| {
-            let [a, b, c] = t.map(|i| i as usize);
-            Aabb::from_points(&[xa[a], xa[b], xa[c], xb[a], xb[b], xb[c]], 0.0)
-        }));
-        let cell = cell_size(&self.iboxes, 0.0).max(cell_size(&self.qboxes, 0.0));
-        self.hash.build(cell, &self.iboxes);
-        collect_pairs(
-            &self.hash,
-            &self.qboxes,
-            &self.iboxes,
-            &mut self.stamp,
-            |v, t| {
-                let tri = &tris[t as usize];
-                !tri.contains(&v) && !across_seam(bits, &[v], tri) && !rest.vt.contains(v, t)
-            },
-            &mut self.pairs,
-        );
-        self.report.candidates += self.pairs.len();
-        if !with_edges {
-            self.pairs_ee.clear();
-            return;
+        if self.bvh.is_none() {
+            let x = self.rest.as_ref().map_or(xa, |r| &r.x[..]);
+            self.bvh = Some(TopologyBvh::build(&self.triangles, &self.edges, x));
         }
-        let edges = &self.edges;
-        self.iboxes.clear();
-        self.iboxes.extend(edges.iter().map(|e| {
-            let (a, b) = (e[0] as usize, e[1] as usize);
-            Aabb::from_points(&[xa[a], xa[b], xb[a], xb[b]], 0.0)
-        }));
-        self.qboxes.clear();
-        self.qboxes
-            .extend(self.iboxes.iter().zip(edges).map(|(bx, e)| {
-                let m = margin(e[0] as usize).max(margin(e[1] as usize));
-                Aabb {
-                    lo: bx.lo - Vec3::splat(m),
-                    hi: bx.hi + Vec3::splat(m),
-                }
-            }));
-        let cell = cell_size(&self.iboxes, 0.0).max(cell_size(&self.qboxes, 0.0));
-        self.hash.build(cell, &self.iboxes);
-        collect_pairs(
-            &self.hash,
-            &self.qboxes,
-            &self.iboxes,
-            &mut self.stamp,
+        let Some(bvh) = self.bvh.as_mut() else {
+            return;
+        };
+        let (tris, edges, bits) = (&self.triangles, &self.edges, &self.seam_bits);
+        bvh.refit(tris, edges, xa, xb, margin, swept);
+        bvh.pairs(
+            tris,
+            edges,
+            with_edges,
+            proximity,
+            // Near pairs are tested below, whatever the cones say: not here too (`rest` is
+            // empty outside proximity passes).
+            |v, t| {
+                !across_seam(bits, &[v], &tris[t as usize])
+                    && !rest.vt.contains(v, t)
+                    && !rest.near_vt.contains(v, t)
+            },
             |a, b| {
                 let (ea, eb) = (&edges[a as usize], &edges[b as usize]);
-                a < b
-                    && !shares_vertex(ea, eb)
-                    && !across_seam(bits, ea, eb)
+                !across_seam(bits, ea, eb)
                     && !rest.ee.contains(a, b)
+                    && !rest.near_ee.contains(a, b)
             },
+            &mut self.pairs,
             &mut self.pairs_ee,
         );
-        self.report.candidates += self.pairs_ee.len();
+        if proximity {
+            // The pairs proximity answers in the cloth's plane, which a cone may have culled.
+            let (pairs, pairs_ee) = (&mut self.pairs, &mut self.pairs_ee);
+            for v in 0..n.min(rest.near_vt.rows()) {
+                for &t in rest.near_vt.row(v) {
+                    let v = v as u32;
+                    if bvh.vt_overlap(v, t) && !across_seam(bits, &[v], &tris[t as usize]) {
+                        pairs.push((v, t));
+                    }
+                }
+            }
+            if with_edges {
+                for e in 0..edges.len().min(rest.near_ee.rows()) {
+                    for &f in rest.near_ee.row(e) {
+                        let (e, f) = (e as u32, f);
+                        if e < f
+                            && bvh.ee_overlap(edges, e, f)
+                            && !across_seam(bits, &edges[e as usize], &edges[f as usize])
+                        {
+                            pairs_ee.push((e, f));
+                        }
+                    }
+                }
+            }
+        }
+        // Answered in (vertex, triangle) and (edge, edge) order, not the tree's: the passes are
+        // Gauss-Seidel, and grouped by leaf pairs they pushed pairs back into contact (2x
+        // crumple: 22 k repulsions and 50 CCD hits, an edge at 1.86x rest; sorted: 2.9 k, 0,
+        // 1.34x).
+        self.pairs.par_sort_unstable();
+        self.pairs_ee.par_sort_unstable();
+        self.report.candidates += self.pairs.len() + self.pairs_ee.len();
+        self.report.node_tests += bvh.node_tests;
     }
 }
 

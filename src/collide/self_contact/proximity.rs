@@ -19,7 +19,7 @@ const OUTSIDE_CONE_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
 const PUSH_CAP: f64 = 1.0 / 3.0;
 
 /// The shortest fold that holds two layers a contact distance apart, over that distance.
-const FOLD_ARC: f64 = std::f64::consts::FRAC_PI_2;
+pub(super) const FOLD_ARC: f64 = std::f64::consts::FRAC_PI_2;
 
 impl SelfCollider {
     /// One Gauss-Seidel pass of proximity repulsion on end positions; returns pairs corrected.

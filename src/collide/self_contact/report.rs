@@ -7,6 +7,8 @@ pub struct SelfContactReport {
     /// Candidate pairs the broad phases handed to the narrow phase (vertex-triangle plus
     /// edge-edge, or vertex-vertex), summed over the passes.
     pub candidates: usize,
+    /// Node tests the broad phase's hierarchy made to find them (its cost), summed.
+    pub node_tests: usize,
     /// Close pairs answered by proximity repulsion.
     pub repulsions: usize,
     /// Pairs exempt from proximity because they are closer than their contact distance in the
@@ -26,6 +28,7 @@ impl SelfContactReport {
     /// Adds one more pass (sums, and the largest zone).
     pub fn add(&mut self, o: &SelfContactReport) {
         self.candidates += o.candidates;
+        self.node_tests += o.node_tests;
         self.repulsions += o.repulsions;
         self.exempt = self.exempt.max(o.exempt);
         self.ccd_passes += o.ccd_passes;

@@ -30,6 +30,18 @@ impl Csr {
         }
     }
 
+    pub fn row(&self, k: usize) -> &[u32] {
+        match (self.start.get(k), self.start.get(k + 1)) {
+            (Some(&s), Some(&e)) => &self.items[s as usize..e as usize],
+            _ => &[],
+        }
+    }
+
+    /// Rows pushed so far.
+    pub fn rows(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
     pub fn len(&self) -> usize {
         self.items.len()
     }
@@ -47,6 +59,11 @@ pub(super) struct RestShape {
     pub vt: Csr,
     pub vv: Csr,
     pub ee: Csr,
+    /// The pairs proximity answers in the cloth's own plane (`proximity::vt_close`) that are not
+    /// exempt: nearer than `FOLD_ARC` contact distances at rest, or (vertex-triangle) touching
+    /// the vertex's 1-ring. The broad phase tests them even where a normal cone culls (`bvh`).
+    pub near_vt: Csr,
+    pub near_ee: Csr,
 }
 
 impl RestShape {
