@@ -139,8 +139,7 @@ impl SelfCollider {
         // Gauss-Seidel and their outcome depends on the order, which is measured, not
         // understood (twice-resolution scenes, one run each): in leaf order the crumple made
         // 22 k repulsions and 50 CCD hits and stretched an edge to 1.86x rest (ascending: 2.9 k,
-        // 0, 1.35x); descending it reached 1.81x; ascending, the chair ends with an intersecting
-        // pair from frame 25 although CCD saw no hit, and the pick towel reaches 2.60x
+        // 0, 1.35x); descending it reached 1.81x; ascending, the pick towel reaches 2.60x
         // (README, "What does not hold yet").
         self.pairs.par_sort_unstable();
         self.pairs_ee.par_sort_unstable();
