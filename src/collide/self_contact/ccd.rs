@@ -2,6 +2,7 @@
 //! each crossing pair is corrected to end a small gap apart on its starting side.
 
 use super::collider::SelfCollider;
+use super::jacobi::Correction;
 use super::stencil::Stencil;
 use crate::collide::narrow;
 use crate::Vec3;
@@ -13,8 +14,8 @@ const CCD_ETA_FRACTION: f64 = 1e-3;
 const CCD_GAP_FRACTION: f64 = 0.1;
 
 impl SelfCollider {
-    /// One Gauss-Seidel CCD pass over (x0 -> x1); corrects each crossing pair so it ends
-    /// separated on its starting side. Returns the number of hits.
+    /// One CCD pass over (x0 -> x1), Jacobi with averaging; corrects each crossing pair so
+    /// it ends separated on its starting side. Returns the number of hits.
     pub(super) fn ccd_pass(
         &mut self,
         x0: &[Vec3],
@@ -33,42 +34,43 @@ impl SelfCollider {
         );
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
-        // Detect in parallel on the current positions, then answer the hits in order
-        // (Gauss-Seidel), re-testing each since earlier corrections may have resolved it;
-        // hits created by corrections are found by the next pass.
-        let (mut flag_vt, mut flag_ee) = std::mem::take(&mut self.flags);
+        // Detect and answer in parallel on the pass's start state, then move each vertex by
+        // the mean of its answers (order-independent; see `jacobi`); hits the answers leave or
+        // create are the next pass's.
+        let mut found = std::mem::take(&mut self.found);
         {
             let this = &*self;
-            let xr: &[Vec3] = x1;
-            pairs
-                .par_iter()
-                .map(|&(v, t)| this.vt_hit(v, t, x0, xr, th).is_some() as u8)
-                .collect_into_vec(&mut flag_vt);
-            pairs_ee
-                .par_iter()
-                .map(|&(a, b)| this.ee_hit(a, b, x0, xr, th).is_some() as u8)
-                .collect_into_vec(&mut flag_ee);
+            let (xr, vr): (&[Vec3], &[Vec3]) = (x1, v1);
+            let answer = |h: Option<(Stencil, Vec3)>| {
+                h.map(|(st, nrm)| this.ccd_correction(&st, nrm, x0, xr, vr, th, correct))
+            };
+            found.clear();
+            found.par_extend(
+                pairs
+                    .par_iter()
+                    .map(|&(v, t)| answer(this.vt_hit(v, t, x0, xr, th)))
+                    .chain(
+                        pairs_ee
+                            .par_iter()
+                            .map(|&(a, b)| answer(this.ee_hit(a, b, x0, xr, th))),
+                    )
+                    .flatten(),
+            );
         }
-        let hits = flag_vt.iter().chain(&flag_ee).filter(|f| **f != 0).count();
-        for (&(v, t), _) in pairs.iter().zip(&flag_vt).filter(|(_, f)| **f != 0) {
-            if let Some((st, nrm)) = self.vt_hit(v, t, x0, x1, th) {
-                if correct {
-                    self.ccd_correct(&st, nrm, x0, x1, v1, th);
-                } else {
-                    self.merge(&st);
-                }
+        let hits = found.len();
+        if correct {
+            let mut pass = std::mem::take(&mut self.jacobi);
+            for c in &found {
+                pass.add(c, &self.w);
+            }
+            pass.apply(x1, v1);
+            self.jacobi = pass;
+        } else {
+            for c in &found {
+                self.merge(&c.st);
             }
         }
-        for (&(e1, e2), _) in pairs_ee.iter().zip(&flag_ee).filter(|(_, f)| **f != 0) {
-            if let Some((st, nrm)) = self.ee_hit(e1, e2, x0, x1, th) {
-                if correct {
-                    self.ccd_correct(&st, nrm, x0, x1, v1, th);
-                } else {
-                    self.merge(&st);
-                }
-            }
-        }
-        self.flags = (flag_vt, flag_ee);
+        self.found = found;
         self.pairs = pairs;
         self.pairs_ee = pairs_ee;
         self.report.ccd_passes += 1;
@@ -124,19 +126,29 @@ impl SelfCollider {
         (st.inv_mass(&self.w) > 0.0).then_some((st, hit.normal))
     }
 
-    /// Moves a crossing pair's end positions so that, along the hit normal oriented to the side
-    /// the pair started on, it ends a small gap apart, and removes its approaching normal
-    /// velocity (an inelastic impact).
+    /// The answer to a crossing pair: its end positions moved so that, along the hit normal
+    /// oriented to the side the pair started on, it ends a small gap apart, and its approaching
+    /// normal velocity removed (an inelastic impact). `correct` false: the hit only (zones).
     #[allow(clippy::too_many_arguments)]
-    fn ccd_correct(
+    fn ccd_correction(
         &self,
         st: &Stencil,
         normal: Vec3,
         x0: &[Vec3],
-        x1: &mut [Vec3],
-        v1: &mut [Vec3],
+        x1: &[Vec3],
+        v1: &[Vec3],
         th: &[f64],
-    ) {
+        correct: bool,
+    ) -> Correction {
+        let none = Correction {
+            st: *st,
+            dx: Vec3::ZERO,
+            dv: Vec3::ZERO,
+            residual: 1.0,
+        };
+        if !correct {
+            return none;
+        }
         let r0 = st.eval(x0);
         let mut n = normal.normalize_or_zero();
         if n == Vec3::ZERO {
@@ -147,14 +159,18 @@ impl SelfCollider {
         }
         let gap = CCD_GAP_FRACTION * st.gap(th);
         let d1 = n.dot(st.eval(x1));
-        if d1 < gap && st.apply(x1, &self.w, n * (gap - d1)) {
-            // The impact is inelastic: the pair's approaching normal velocity goes, nothing
-            // more. Adding the position change over h instead (as before) turned a deep
-            // correction into speed: 14.5 m/s on robot_cape where the arms reverse (t = 1.5 s).
-            let vn = n.dot(st.eval(v1));
-            if vn < 0.0 {
-                st.apply(v1, &self.w, n * -vn);
-            }
+        if d1 >= gap {
+            return none;
+        }
+        // The impact is inelastic: the pair's approaching normal velocity goes, nothing more.
+        // Adding the position change over h instead (as before) turned a deep correction into
+        // speed: 14.5 m/s on robot_cape where the arms reverse (t = 1.5 s).
+        let vn = n.dot(st.eval(v1));
+        Correction {
+            st: *st,
+            dx: n * (gap - d1),
+            dv: if vn < 0.0 { n * -vn } else { Vec3::ZERO },
+            residual: 1.0,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! the passes, and the stencils of its pairs.
 
 use super::bvh::TopologyBvh;
+use super::jacobi::{Correction, JacobiPass};
 use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
@@ -22,8 +23,9 @@ pub(crate) struct SelfCollider {
     pub(super) stamp: PairScratch,
     /// The end positions in the frame of the cloth's mean motion (the CCD broad phase's).
     pub(super) x_mean_frame: Vec<Vec3>,
-    /// Per-candidate flags of a pass (vertex-triangle, edge-edge), reused.
-    pub(super) flags: (Vec<u8>, Vec<u8>),
+    /// The answers of a pass and their per-vertex means, reused.
+    pub(super) found: Vec<Correction>,
+    pub(super) jacobi: JacobiPass,
     pub(super) pairs: Vec<(u32, u32)>,
     pub(super) pairs_ee: Vec<(u32, u32)>,
     pub(super) w: Vec<f64>,
@@ -78,7 +80,8 @@ impl SelfCollider {
             iboxes: Vec::new(),
             stamp: PairScratch::default(),
             x_mean_frame: Vec::new(),
-            flags: (Vec::new(), Vec::new()),
+            found: Vec::new(),
+            jacobi: JacobiPass::default(),
             pairs: Vec::new(),
             pairs_ee: Vec::new(),
             w: Vec::new(),

@@ -19,6 +19,7 @@ mod ccd;
 mod collider;
 mod exempt;
 mod intersections;
+mod jacobi;
 mod pairs;
 mod proximity;
 mod report;

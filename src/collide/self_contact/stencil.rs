@@ -23,7 +23,7 @@ impl Stencil {
             .sum()
     }
 
-    /// Changes `r` by `d` (if any vertex can move), returning false otherwise.
+    /// The per-vertex moves that change `r` by `d` (None when no vertex can move).
     ///
     /// The minimal-energy distribution moves vertex k by `c_k w_k / M` times `d`: among free
     /// vertices that follows their masses, but where kinematic vertices carry most of both sides'
@@ -34,18 +34,19 @@ impl Stencil {
     /// which leaves every such pair's arithmetic as it was): the free vertices move as far as a
     /// free side would. What that leaves of the pair is mostly the scene's motion, and is the
     /// next pass's and the impact zones' (which move with kinematic vertices rigidly).
-    pub fn apply(&self, x: &mut [Vec3], w: &[f64], d: Vec3) -> bool {
+    pub fn moves(&self, w: &[f64], d: Vec3) -> Option<[Vec3; 4]> {
         let m = self.inv_mass(w);
         if m <= 0.0 {
-            return false;
+            return None;
         }
         let share = self.free_share(w);
         let d = if share < 1.0 { d * share } else { d };
+        let mut out = [Vec3::ZERO; 4];
         for k in 0..self.len {
             let i = self.idx[k] as usize;
-            x[i] += d * (self.c[k] * w[i] / m);
+            out[k] = d * (self.c[k] * w[i] / m);
         }
-        true
+        Some(out)
     }
 
     /// The larger of the two sides' free weight over its whole weight (`r`'s positive and
