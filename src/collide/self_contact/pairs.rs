@@ -135,12 +135,9 @@ impl SelfCollider {
                 }
             }
         }
-        // Answered in (vertex, triangle) and (edge, edge) order, not the tree's. The passes are
-        // Gauss-Seidel and their outcome depends on the order, which is measured, not
-        // understood (twice-resolution scenes, one run each): in leaf order the crumple made
-        // 22 k repulsions and 50 CCD hits and stretched an edge to 1.86x rest (ascending: 2.9 k,
-        // 0, 1.35x); descending it reached 1.81x; ascending, the pick towel reaches 2.60x
-        // (README, "What does not hold yet").
+        // Sorted, not in the tree's order: the passes are Jacobi (`jacobi`), so the order only
+        // decides in which order floating-point sums are taken, and sorted keeps a run's bytes
+        // independent of the tree's shape.
         self.pairs.par_sort_unstable();
         self.pairs_ee.par_sort_unstable();
         self.report.candidates += self.pairs.len() + self.pairs_ee.len();
