@@ -61,7 +61,7 @@ fn segment_crosses(p: Vec3, q: Vec3, t: [Vec3; 3]) -> bool {
     let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
     let h = d.cross(e2);
     let a = e1.dot(h);
-    if !(a.abs() > 1e-12 * d.length() * e1.length() * e2.length()) {
+    if a.is_nan() || a.abs() <= 1e-12 * d.length() * e1.length() * e2.length() {
         return false;
     }
     let f = 1.0 / a;
