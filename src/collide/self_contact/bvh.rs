@@ -153,6 +153,9 @@ pub(super) struct TopologyBvh {
     /// tested.
     leaf_pairs: Vec<(u32, u32)>,
     pub node_tests: usize,
+    /// Per node, for the current traversal: whether it may hold a changed element (empty:
+    /// every node may).
+    changed: Vec<bool>,
     chunks: Vec<(Pairs, Pairs)>,
 }
 
@@ -389,6 +392,7 @@ impl TopologyBvh {
         edges: &[[u32; 2]],
         with_edges: bool,
         proximity: bool,
+        changed: Option<&[bool]>,
         accept_vt: impl Fn(u32, u32) -> bool + Sync,
         accept_ee: impl Fn(u32, u32) -> bool + Sync,
         vt: &mut Vec<(u32, u32)>,
@@ -399,9 +403,49 @@ impl TopologyBvh {
         } else {
             CCD_CONE_COS
         };
+        self.mark_changed(triangles, edges, changed);
         self.pairs_within(
             triangles, edges, with_edges, cos, accept_vt, accept_ee, vt, ee,
         );
+    }
+
+    /// Per node: whether an element under it has a vertex in `changed` (None: every node).
+    /// The traversal skips node pairs where neither has: their element pairs are the caller's
+    /// to skip too (`changed.rs`), and this keeps the traversal at the cost of what changed.
+    fn mark_changed(
+        &mut self,
+        triangles: &[[u32; 3]],
+        edges: &[[u32; 2]],
+        changed: Option<&[bool]>,
+    ) {
+        self.changed.clear();
+        let Some(flags) = changed else {
+            return;
+        };
+        let hit = |i: u32| flags.get(i as usize).copied().unwrap_or(true);
+        let m = self.nodes.len();
+        self.changed.resize(m, false);
+        for k in (0..m).rev() {
+            let nd = &self.nodes[k];
+            self.changed[k] = if nd.is_leaf() {
+                let tris = &self.order[nd.first as usize..(nd.first + nd.count) as usize];
+                let own_v = &self.owned_v[nd.verts.0 as usize..nd.verts.1 as usize];
+                let own_e = &self.owned_e[nd.edges.0 as usize..nd.edges.1 as usize];
+                tris.iter()
+                    .any(|&t| triangles[t as usize].iter().any(|&v| hit(v)))
+                    || own_v.iter().any(|&v| hit(v))
+                    || own_e
+                        .iter()
+                        .any(|&e| edges[e as usize].iter().any(|&v| hit(v)))
+            } else {
+                self.changed[k + 1] || self.changed[nd.right as usize]
+            };
+        }
+    }
+
+    /// Whether node `k` may hold a changed element (every node when none were given).
+    fn may_change(&self, k: usize) -> bool {
+        self.changed.get(k).copied().unwrap_or(true)
     }
 
     /// `pairs` with cones culling below the half-angle whose cosine is `cos` (1: none cull).
@@ -487,6 +531,9 @@ impl TopologyBvh {
     /// Pairs inside node `k`.
     fn self_test(&self, k: usize, cos: f64, out: &mut Vec<(u32, u32)>, tests: &mut usize) {
         let nd = &self.nodes[k];
+        if !self.may_change(k) {
+            return;
+        }
         *tests += 1;
         if self.cone[k].culls(cos) && self.star(self.nodes[k].contour, self.cone[k].axis) {
             return;
@@ -510,6 +557,9 @@ impl TopologyBvh {
         out: &mut Vec<(u32, u32)>,
         tests: &mut usize,
     ) {
+        if !self.may_change(a) && !self.may_change(b) {
+            return;
+        }
         *tests += 1;
         let m = self.nmargin[a].max(self.nmargin[b]);
         let (ba, bb) = (&self.nbox[a], &self.nbox[b]);

@@ -24,6 +24,18 @@ impl SelfCollider {
         th: &[f64],
         correct: bool,
     ) -> usize {
+        // After a correcting pass of this step only pairs with a changed vertex can hit anew
+        // (`changed`); the zones' passes (not correcting) answer every pair.
+        let since = if correct {
+            self.ccd_changed.update(x1, None)
+        } else {
+            self.ccd_changed.forget();
+            None
+        };
+        if since == Some(false) {
+            return 0;
+        }
+        let changed = std::mem::take(&mut self.ccd_changed);
         self.broad_phase(
             x0,
             x1,
@@ -31,7 +43,9 @@ impl SelfCollider {
             false,
             false,
             true,
+            since.map(|_| changed.flags()),
         );
+        self.ccd_changed = changed;
         let pairs = std::mem::take(&mut self.pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Detect and answer in parallel on the pass's start state, then move each vertex by
@@ -62,6 +76,7 @@ impl SelfCollider {
             let mut pass = std::mem::take(&mut self.jacobi);
             for c in &found {
                 pass.add(c, &self.w);
+                self.ccd_changed.answer_again(&c.st.idx[..c.st.len]);
             }
             pass.apply(x1, v1);
             self.jacobi = pass;

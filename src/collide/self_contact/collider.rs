@@ -2,6 +2,7 @@
 //! the passes, and the stencils of its pairs.
 
 use super::bvh::TopologyBvh;
+use super::changed::Changed;
 use super::jacobi::{Correction, JacobiPass};
 use super::report::SelfContactReport;
 use super::rest::RestShape;
@@ -26,6 +27,9 @@ pub(crate) struct SelfCollider {
     /// The answers of a pass and their per-vertex means, reused.
     pub(super) found: Vec<Correction>,
     pub(super) jacobi: JacobiPass,
+    /// What changed since the last repulsion pass, and since the last correcting CCD pass.
+    pub(super) rep_changed: Changed,
+    pub(super) ccd_changed: Changed,
     pub(super) pairs: Vec<(u32, u32)>,
     pub(super) pairs_ee: Vec<(u32, u32)>,
     pub(super) w: Vec<f64>,
@@ -82,6 +86,8 @@ impl SelfCollider {
             x_mean_frame: Vec::new(),
             found: Vec::new(),
             jacobi: JacobiPass::default(),
+            rep_changed: Changed::default(),
+            ccd_changed: Changed::default(),
             pairs: Vec::new(),
             pairs_ee: Vec::new(),
             w: Vec::new(),

@@ -9,13 +9,21 @@
 //! `M = sum c_k^2 w_k` (w = inverse mass), the minimal-kinetic-energy impulse; kinematic
 //! vertices (w = 0) never move.
 //!
+//! Repulsion and CCD passes are Jacobi: every pair's correction is computed from the state the
+//! pass starts in, and each vertex moves by the length-weighted mean of its pairs' moves
+//! (`jacobi`), so the outcome does not depend on the order the broad phase lists pairs in (in
+//! order, Gauss-Seidel, the pick towel at twice its resolution reached 2.60x rest on one order).
+//!
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
-//! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no contact: rest proximity, seams being
-//! sewn; `rest` holds the rest-close lists), one query per file (`proximity`, `ccd`, `intersections`), `zones` (the impact-zone
-//! fail-safe), `resolve` (their order per detection mode), `report` (its counts).
+//! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no
+//! contact: rest proximity, seams being sewn; `rest` holds the rest-close lists), one query per
+//! file (`proximity`, `ccd`, `intersections`), `jacobi` (a pass's corrections averaged per
+//! vertex), `changed` (the pairs a pass can skip: none of their vertices changed), `zones` (the impact-zone fail-safe), `resolve` (their order per detection mode),
+//! `report` (its counts).
 
 mod bvh;
 mod ccd;
+mod changed;
 mod collider;
 mod exempt;
 mod intersections;

@@ -8,6 +8,7 @@
 //! (falling, carried by a gripper) neighbours' boxes no longer overlap along the whole motion.
 
 use super::bvh::TopologyBvh;
+use super::changed::any_of;
 use super::collider::SelfCollider;
 use super::exempt::across_seam;
 use super::rest::RestShape;
@@ -20,7 +21,8 @@ impl SelfCollider {
     /// vertex-triangle into `pairs`, edge-edge into `pairs_ee` (or vertex-vertex into `pairs`).
     /// Pairs across a seam being sewn are never candidates; with `proximity`, neither are pairs
     /// closer than their contact distance in the rest shape (see `exempt`). Without `with_edges`
-    /// no edge-edge pairs are collected.
+    /// no edge-edge pairs are collected. With `changed`, only pairs with a vertex it flags
+    /// (the hierarchy's phases; see `changed`).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn broad_phase(
         &mut self,
@@ -30,6 +32,7 @@ impl SelfCollider {
         vertex_vertex: bool,
         proximity: bool,
         with_edges: bool,
+        changed: Option<&[bool]>,
     ) {
         let none = RestShape::default();
         let rest = match (&self.rest, proximity) {
@@ -94,16 +97,20 @@ impl SelfCollider {
             edges,
             with_edges,
             proximity,
+            changed,
             // Near pairs are tested below, whatever the cones say: not here too (`rest` is
             // empty outside proximity passes).
             |v, t| {
-                !across_seam(bits, &[v], &tris[t as usize])
+                let tri = &tris[t as usize];
+                changed.is_none_or(|f| any_of(f, &[v, tri[0], tri[1], tri[2]]))
+                    && !across_seam(bits, &[v], tri)
                     && !rest.vt.contains(v, t)
                     && !rest.near_vt.contains(v, t)
             },
             |a, b| {
                 let (ea, eb) = (&edges[a as usize], &edges[b as usize]);
-                !across_seam(bits, ea, eb)
+                changed.is_none_or(|f| any_of(f, &[ea[0], ea[1], eb[0], eb[1]]))
+                    && !across_seam(bits, ea, eb)
                     && !rest.ee.contains(a, b)
                     && !rest.near_ee.contains(a, b)
             },
