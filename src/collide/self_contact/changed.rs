@@ -2,9 +2,9 @@
 //! changed gets the same answer from the next pass, so the next pass skips it.
 //!
 //! That is exact (the positions a pass ends in are the same with or without the skip, bit for
-//! bit; the pairs a pass answered are answered again): a
-//! repulsion pass answers a pair from its positions and velocities alone, and a CCD pass a pair
-//! from its start and end positions, which within one step share the start. It is what keeps
+//! bit, since the pairs a pass answered are answered again): a repulsion pass answers a pair
+//! from its positions and velocities alone, and a CCD pass a pair from its start and end
+//! positions, which within one step share the start. It is what keeps
 //! the Jacobi repulsion's later passes and the CCD passes after an obstacle re-test at the cost
 //! of what moved, not of the cloth (crumple 64x64: three repulsion passes each re-answered
 //! every one of about 25 k candidates).
@@ -29,7 +29,7 @@ impl Changed {
 
     /// Compares `x` (and `v`) with the recorded state and records them for the pass after.
     /// Returns None when nothing was recorded (every pair is to be answered), else whether any
-    /// vertex changed; [`Changed::any_of`] then tells which.
+    /// vertex changed ([`Changed::flags`] tells which).
     pub fn update(&mut self, x: &[Vec3], v: Option<&[Vec3]>) -> Option<bool> {
         let n = x.len();
         let had = self.valid && self.x.len() == n && v.is_none_or(|v| self.v.len() == v.len());

@@ -48,6 +48,18 @@ pub(super) fn shares_vertex(a: &[u32], b: &[u32]) -> bool {
     a.iter().any(|v| b.contains(v))
 }
 
+/// The four vertices of vertex-triangle pair `(v, t)`.
+pub(super) fn vt_vertices(triangles: &[[u32; 3]], v: u32, t: u32) -> [u32; 4] {
+    let tri = triangles[t as usize];
+    [v, tri[0], tri[1], tri[2]]
+}
+
+/// The four vertices of edge-edge pair `(e, f)`.
+pub(super) fn ee_vertices(edges: &[[u32; 2]], e: u32, f: u32) -> [u32; 4] {
+    let (a, b) = (edges[e as usize], edges[f as usize]);
+    [a[0], a[1], b[0], b[1]]
+}
+
 impl SelfCollider {
     pub fn new(triangles: &[[u32; 3]], n_vertices: usize) -> Self {
         let mut edges: Vec<[u32; 2]> = triangles

@@ -18,8 +18,9 @@
 //! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no
 //! contact: rest proximity, seams being sewn; `rest` holds the rest-close lists), one query per
 //! file (`proximity`, `ccd`, `intersections`), `jacobi` (a pass's corrections averaged per
-//! vertex), `changed` (the pairs a pass can skip: none of their vertices changed), `zones` (the impact-zone fail-safe), `resolve` (their order per detection mode),
-//! `report` (its counts).
+//! vertex), `changed` (the pairs a pass can skip: none of their vertices changed), `zones`
+//! (the impact-zone fail-safe), `resolve` (their order per detection mode), `report` (its
+//! counts).
 
 mod bvh;
 mod ccd;

@@ -9,7 +9,7 @@
 
 use super::bvh::TopologyBvh;
 use super::changed::any_of;
-use super::collider::SelfCollider;
+use super::collider::{ee_vertices, vt_vertices, SelfCollider};
 use super::exempt::across_seam;
 use super::rest::RestShape;
 use crate::collide::broad::{cell_size, collect_pairs, Aabb};
@@ -101,15 +101,14 @@ impl SelfCollider {
             // Near pairs are tested below, whatever the cones say: not here too (`rest` is
             // empty outside proximity passes).
             |v, t| {
-                let tri = &tris[t as usize];
-                changed.is_none_or(|f| any_of(f, &[v, tri[0], tri[1], tri[2]]))
-                    && !across_seam(bits, &[v], tri)
+                changed.is_none_or(|f| any_of(f, &vt_vertices(tris, v, t)))
+                    && !across_seam(bits, &[v], &tris[t as usize])
                     && !rest.vt.contains(v, t)
                     && !rest.near_vt.contains(v, t)
             },
             |a, b| {
                 let (ea, eb) = (&edges[a as usize], &edges[b as usize]);
-                changed.is_none_or(|f| any_of(f, &[ea[0], ea[1], eb[0], eb[1]]))
+                changed.is_none_or(|f| any_of(f, &ee_vertices(edges, a, b)))
                     && !across_seam(bits, ea, eb)
                     && !rest.ee.contains(a, b)
                     && !rest.near_ee.contains(a, b)

@@ -2,7 +2,7 @@
 //! positions, answered by inelastic repulsion with Coulomb friction (Bridson et al. 2002).
 
 use super::changed::any_of;
-use super::collider::SelfCollider;
+use super::collider::{ee_vertices, vt_vertices, SelfCollider};
 use super::jacobi::Correction;
 use super::stencil::Stencil;
 use crate::collide::narrow;
@@ -33,8 +33,8 @@ pub(super) const FOLD_ARC: f64 = std::f64::consts::FRAC_PI_2;
 impl SelfCollider {
     /// One pass of proximity repulsion (Jacobi, averaged) on the candidates of a fresh broad
     /// phase, or (`fresh` false) on the previous pass's, of which only those with a changed
-    /// vertex (`changed`); returns the pairs still short of their contact
-    /// distance by more than [`SETTLED`] of it on end positions.
+    /// vertex (`changed`); returns the pairs still short of their contact distance by more
+    /// than [`SETTLED`] of it on end positions.
     /// `with_edges`: edge-edge pairs too (without CCD behind it); with CCD the vertex-triangle
     /// pairs keep the layers apart and CCD answers edges that cross, at half the cost
     /// (robot_pick_towel: the collision stage 11.1 s -> 5.1 s over 4 s simulated, still no
@@ -84,8 +84,6 @@ impl SelfCollider {
             let answer = |c: Option<(Stencil, Vec3, f64)>| {
                 c.and_then(|(st, n, gap)| this.repel(&st, n, gap, xr, vr, friction))
             };
-            let tris = &this.triangles;
-            let edges = &this.edges;
             found.clear();
             found.par_extend(
                 pairs
@@ -94,18 +92,14 @@ impl SelfCollider {
                         if vertex_vertex {
                             anew(&[a, b])
                         } else {
-                            let t = tris[b as usize];
-                            anew(&[a, t[0], t[1], t[2]])
+                            anew(&vt_vertices(&this.triangles, a, b))
                         }
                     })
                     .map(|&(a, b)| answer(this.vt_close(a, b, x0, xr, th, vertex_vertex)))
                     .chain(
                         pairs_ee
                             .par_iter()
-                            .filter(|&&(a, b)| {
-                                let (e, f) = (edges[a as usize], edges[b as usize]);
-                                anew(&[e[0], e[1], f[0], f[1]])
-                            })
+                            .filter(|&&(a, b)| anew(&ee_vertices(&this.edges, a, b)))
                             .map(|&(a, b)| answer(this.ee_close(a, b, x0, xr, th))),
                     )
                     .flatten(),
