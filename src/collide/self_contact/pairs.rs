@@ -118,7 +118,10 @@ impl SelfCollider {
         );
         if proximity {
             // The pairs proximity answers in the cloth's plane, which a cone may have culled.
-            let (pairs, pairs_ee) = (&mut self.pairs, &mut self.pairs_ee);
+            // Near vertex-triangle pairs apart: sorted as listed, and tested by a kernel of
+            // their own (`proximity::near_close`).
+            let (pairs, pairs_ee) = (&mut self.pairs_near, &mut self.pairs_ee);
+            pairs.clear();
             for v in 0..n.min(rest.near_vt.rows()) {
                 for &t in rest.near_vt.row(v) {
                     let v = v as u32;
@@ -147,6 +150,9 @@ impl SelfCollider {
         self.pairs.par_sort_unstable();
         self.pairs_ee.par_sort_unstable();
         self.report.candidates += self.pairs.len() + self.pairs_ee.len();
+        if proximity {
+            self.report.candidates += self.pairs_near.len();
+        }
         self.report.node_tests += bvh.node_tests;
     }
 }

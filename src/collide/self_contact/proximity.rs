@@ -64,6 +64,10 @@ impl SelfCollider {
                 None,
             );
             self.rep_changed.forget();
+            if vertex_vertex {
+                self.pairs_near.clear();
+            }
+            merge_by_key(&self.pairs, &self.pairs_near, &mut self.rep_pairs);
         }
         // On the previous pass's candidates only the pairs with a changed vertex can answer
         // anew (`changed`).
@@ -71,7 +75,7 @@ impl SelfCollider {
         if since == Some(false) {
             return 0;
         }
-        let pairs = std::mem::take(&mut self.pairs);
+        let pairs = std::mem::take(&mut self.rep_pairs);
         let pairs_ee = std::mem::take(&mut self.pairs_ee);
         // Find close pairs and their answers in parallel on the pass's start state, then move
         // each vertex by the mean of its answers (order-independent; see `jacobi`).
@@ -88,14 +92,20 @@ impl SelfCollider {
             found.par_extend(
                 pairs
                     .par_iter()
-                    .filter(|&&(a, b)| {
+                    .filter(|&&(a, b, _)| {
                         if vertex_vertex {
                             anew(&[a, b])
                         } else {
                             anew(&vt_vertices(&this.triangles, a, b))
                         }
                     })
-                    .map(|&(a, b)| answer(this.vt_close(a, b, x0, xr, th, vertex_vertex)))
+                    .map(|&(a, b, near)| {
+                        answer(if near {
+                            this.near_close(a, b, x0, xr, th)
+                        } else {
+                            this.vt_close(a, b, x0, xr, th, vertex_vertex)
+                        })
+                    })
                     .chain(
                         pairs_ee
                             .par_iter()
@@ -115,7 +125,7 @@ impl SelfCollider {
         self.report.repulsions += found.len();
         self.jacobi = pass;
         self.found = found;
-        self.pairs = pairs;
+        self.rep_pairs = pairs;
         self.pairs_ee = pairs_ee;
         unsettled
     }
@@ -164,6 +174,54 @@ impl SelfCollider {
             return None;
         }
         let (q, bary) = narrow::point_triangle_closest(p, pa, pb, pc);
+        self.vt_close_at(a, b, q, bary, x0, x, th)
+    }
+
+    /// `vt_close` for a pair near in the rest shape (`RestShape::near_vt`), most of them the
+    /// flat sheet around the vertex one ring or two beyond its contact distance. Such a pair
+    /// is rejected on squared distances alone when it is also near in the rest shape at its
+    /// closest point (answered along that point's direction, below): beyond its contact
+    /// distance, nothing. In-plane, the plane test of `vt_close` rejects none of them.
+    fn near_close(
+        &self,
+        a: u32,
+        b: u32,
+        x0: &[Vec3],
+        x: &[Vec3],
+        th: &[f64],
+    ) -> Option<(Stencil, Vec3, f64)> {
+        let [pa, pb, pc] = self.triangles[b as usize].map(|i| x[i as usize]);
+        let p = x[a as usize];
+        let (q, bary) = narrow::point_triangle_closest(p, pa, pb, pc);
+        let st = self.vt_stencil(a, b, bary);
+        let gap = st.gap(th);
+        // Margins of a part in 1e12 keep the squares on the side the lengths are on.
+        let near = self
+            .rest
+            .as_ref()
+            .and_then(|r| r.distance_squared(&st))
+            .is_some_and(|d2| d2 < (FOLD_ARC * gap).powi(2) * (1.0 - 1e-12));
+        if near && (p - q).length_squared() >= gap * gap * (1.0 + 1e-12) {
+            return None;
+        }
+        self.vt_close_at(a, b, q, bary, x0, x, th)
+    }
+
+    /// `vt_close` from the vertex's closest point `q` (barycentric `bary`) on the triangle.
+    #[allow(clippy::too_many_arguments)]
+    fn vt_close_at(
+        &self,
+        a: u32,
+        b: u32,
+        q: Vec3,
+        bary: [f64; 3],
+        x0: &[Vec3],
+        x: &[Vec3],
+        th: &[f64],
+    ) -> Option<(Stencil, Vec3, f64)> {
+        let t = self.triangles[b as usize];
+        let [pa, pb, pc] = t.map(|i| x[i as usize]);
+        let p = x[a as usize];
         let st = self.vt_stencil(a, b, bary);
         let rest_d = self
             .rest
@@ -293,6 +351,23 @@ impl SelfCollider {
             dv,
             residual: (gap - dist) / gap,
         })
+    }
+}
+
+/// The union of two sorted pair lists in order, each pair flagged with whether it came from
+/// `near`.
+fn merge_by_key(tree: &[(u32, u32)], near: &[(u32, u32)], out: &mut Vec<(u32, u32, bool)>) {
+    out.clear();
+    out.reserve(tree.len() + near.len());
+    let (mut i, mut j) = (0, 0);
+    while i < tree.len() || j < near.len() {
+        if j == near.len() || (i < tree.len() && tree[i] <= near[j]) {
+            out.push((tree[i].0, tree[i].1, false));
+            i += 1;
+        } else {
+            out.push((near[j].0, near[j].1, true));
+            j += 1;
+        }
     }
 }
 

@@ -74,9 +74,14 @@ impl RestShape {
 
     /// The pair's separation in the rest shape (infinite where its vertices are not in it).
     pub(super) fn distance(&self, st: &super::stencil::Stencil) -> f64 {
+        self.distance_squared(st).map_or(f64::INFINITY, f64::sqrt)
+    }
+
+    /// The square of `distance` (None where its vertices are not in the rest shape).
+    pub(super) fn distance_squared(&self, st: &super::stencil::Stencil) -> Option<f64> {
         if st.idx[..st.len].iter().any(|&i| i as usize >= self.x.len()) {
-            return f64::INFINITY;
+            return None;
         }
-        st.eval(&self.x).length()
+        Some(st.eval(&self.x).length_squared())
     }
 }
