@@ -318,16 +318,6 @@ impl TopologyBvh {
         self.margin.clear();
         self.margin.extend((0..n).map(&margin));
         let vb = &self.vbox;
-        // An element with an empty (non-finite) vertex box is empty: near nothing.
-        let joined = |a: Aabb, b: Aabb| {
-            if a == Aabb::EMPTY || b == Aabb::EMPTY {
-                return Aabb::EMPTY;
-            }
-            Aabb {
-                lo: a.lo.min(b.lo),
-                hi: a.hi.max(b.hi),
-            }
-        };
         let get = |i: u32| vb.get(i as usize).copied().unwrap_or(Aabb::EMPTY);
         self.tbox.clear();
         self.tbox.extend(
@@ -350,17 +340,7 @@ impl TopologyBvh {
             .into_par_iter()
             .filter(|&k| self.nodes[k].is_leaf())
             .map(|k| {
-                let nd = &self.nodes[k];
-                let tris = &self.order[nd.first as usize..(nd.first + nd.count) as usize];
-                let mut b = Aabb::EMPTY;
-                let mut mg = 0.0f64;
-                for &t in tris {
-                    b = hull(b, self.tbox[t as usize]);
-                    for &v in &triangles[t as usize] {
-                        mg = mg.max(self.margin.get(v as usize).copied().unwrap_or(0.0));
-                    }
-                }
-                let cone = leaf_cone(tris, triangles, xa, xb, swept);
+                let (b, mg, cone) = self.leaf_fit(k, triangles);
                 (k, b, mg, cone)
             })
             .collect();
@@ -370,15 +350,87 @@ impl TopologyBvh {
             self.cone[k] = c;
         }
         for k in (0..m).rev() {
-            let nd = &self.nodes[k];
-            if nd.is_leaf() {
+            if !self.nodes[k].is_leaf() {
+                self.join_children(k);
+            }
+        }
+    }
+
+    /// `refit` after only the vertices `changed` flags moved, their end positions now `xb`
+    /// (start positions, margins and frame as in the last swept refit, which the caller
+    /// vouches for): the boxes and cones of what holds them, the rest as they were. A CCD pass
+    /// after an obstacle re-test moved a few vertices of a 64x64 cloth, not 4096.
+    pub fn refit_changed(
+        &mut self,
+        triangles: &[[u32; 3]],
+        edges: &[[u32; 2]],
+        xb: &[Vec3],
+        changed: &[bool],
+    ) {
+        let n = self.xb.len().min(xb.len()).min(changed.len());
+        for i in (0..n).filter(|&i| changed[i]) {
+            self.xb[i] = xb[i];
+            let b = Aabb::from_points(&[self.xa[i], xb[i]], 0.0);
+            self.vbox[i] = if b.lo.is_finite() && b.hi.is_finite() {
+                b
+            } else {
+                Aabb::EMPTY
+            };
+        }
+        let hit = |i: u32| changed.get(i as usize).copied().unwrap_or(true);
+        let get = |vb: &[Aabb], i: u32| vb.get(i as usize).copied().unwrap_or(Aabb::EMPTY);
+        for (k, t) in triangles.iter().enumerate() {
+            if t.iter().any(|&v| hit(v)) {
+                let vb = &self.vbox;
+                self.tbox[k] = joined(joined(get(vb, t[0]), get(vb, t[1])), get(vb, t[2]));
+            }
+        }
+        for (k, e) in edges.iter().enumerate() {
+            if e.iter().any(|&v| hit(v)) {
+                self.ebox[k] = joined(get(&self.vbox, e[0]), get(&self.vbox, e[1]));
+            }
+        }
+        self.mark_changed(triangles, edges, Some(changed));
+        for k in (0..self.nodes.len()).rev() {
+            if !self.changed[k] {
                 continue;
             }
-            let (l, r) = (k + 1, nd.right as usize);
-            self.nbox[k] = hull(self.nbox[l], self.nbox[r]);
-            self.nmargin[k] = self.nmargin[l].max(self.nmargin[r]);
-            self.cone[k] = self.cone[l].merge(self.cone[r]);
+            if self.nodes[k].is_leaf() {
+                (self.nbox[k], self.nmargin[k], self.cone[k]) = self.leaf_fit(k, triangles);
+            } else {
+                self.join_children(k);
+            }
         }
+    }
+
+    /// Leaf `k`'s box, largest margin and cone over the current element boxes and motion.
+    fn leaf_fit(&self, k: usize, triangles: &[[u32; 3]]) -> (Aabb, f64, Cone) {
+        let nd = &self.nodes[k];
+        let tris = &self.order[nd.first as usize..(nd.first + nd.count) as usize];
+        let mut b = Aabb::EMPTY;
+        let mut mg = 0.0f64;
+        for &t in tris {
+            b = hull(b, self.tbox[t as usize]);
+            for &v in &triangles[t as usize] {
+                mg = mg.max(self.margin.get(v as usize).copied().unwrap_or(0.0));
+            }
+        }
+        let xb = if self.swept { &self.xb } else { &self.xa };
+        (b, mg, leaf_cone(tris, triangles, &self.xa, xb, self.swept))
+    }
+
+    /// Internal node `k`'s box, margin and cone from its children's.
+    fn join_children(&mut self, k: usize) {
+        let (l, r) = (k + 1, self.nodes[k].right as usize);
+        self.nbox[k] = hull(self.nbox[l], self.nbox[r]);
+        self.nmargin[k] = self.nmargin[l].max(self.nmargin[r]);
+        self.cone[k] = self.cone[l].merge(self.cone[r]);
+    }
+
+    /// Whether the last refit was swept from exactly `xa` (the start positions a re-test
+    /// keeps).
+    pub fn swept_from(&self, xa: &[Vec3]) -> bool {
+        self.swept && self.xa == xa
     }
 
     /// Candidate vertex-triangle pairs into `vt` and (with `with_edges`) edge-edge pairs
@@ -713,6 +765,18 @@ impl TopologyBvh {
 }
 
 /// The box holding both (the empty box holds nothing).
+/// The box of an element from its vertices' boxes: empty where one is (a non-finite vertex
+/// box), so the element is near nothing.
+fn joined(a: Aabb, b: Aabb) -> Aabb {
+    if a == Aabb::EMPTY || b == Aabb::EMPTY {
+        return Aabb::EMPTY;
+    }
+    Aabb {
+        lo: a.lo.min(b.lo),
+        hi: a.hi.max(b.hi),
+    }
+}
+
 fn hull(a: Aabb, b: Aabb) -> Aabb {
     Aabb {
         lo: a.lo.min(b.lo),

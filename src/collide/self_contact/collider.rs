@@ -24,6 +24,9 @@ pub(crate) struct SelfCollider {
     pub(super) stamp: PairScratch,
     /// The end positions in the frame of the cloth's mean motion (the CCD broad phase's).
     pub(super) x_mean_frame: Vec<Vec3>,
+    /// The translation of that frame at the hierarchy's last refit when it was swept (CCD),
+    /// kept by a re-test's refit of what changed.
+    pub(super) swept_frame: Option<Vec3>,
     /// The answers of a pass and their per-vertex means, reused.
     pub(super) found: Vec<Correction>,
     pub(super) jacobi: JacobiPass,
@@ -102,6 +105,7 @@ impl SelfCollider {
             iboxes: Vec::new(),
             stamp: PairScratch::default(),
             x_mean_frame: Vec::new(),
+            swept_frame: None,
             found: Vec::new(),
             jacobi: JacobiPass::default(),
             rep_changed: Changed::default(),

@@ -44,9 +44,19 @@ impl SelfCollider {
         let n = xa.len().min(xb.len());
         // Proximity passes test the end positions alone (no motion to bound the normals over).
         let swept = !std::ptr::eq(xa.as_ptr(), xb.as_ptr());
+        // A re-test of a swept pass from the same start, after only the `changed` vertices
+        // moved: the last refit's frame (any common translation serves, see above) and boxes,
+        // updated where they changed.
+        let retest = match (self.swept_frame, &self.bvh, changed) {
+            (Some(u), Some(bvh), Some(_)) if swept && bvh.swept_from(&xa[..n]) => Some(u),
+            _ => None,
+        };
         // At rest positions (xa == xb, the proximity passes) the mean motion is zero and this
         // is a copy.
-        in_mean_frame(&mut self.x_mean_frame, &xa[..n], &xb[..n]);
+        let u = retest.unwrap_or_else(|| mean_motion(&xa[..n], &xb[..n]));
+        self.x_mean_frame.clear();
+        self.x_mean_frame.extend(xb[..n].iter().map(|b| *b - u));
+        self.swept_frame = swept.then_some(u);
         let xb = &self.x_mean_frame[..];
         if vertex_vertex {
             self.qboxes.clear();
@@ -91,7 +101,10 @@ impl SelfCollider {
             return;
         };
         let (tris, edges, bits) = (&self.triangles, &self.edges, &self.seam_bits);
-        bvh.refit(tris, edges, xa, xb, margin, swept);
+        match (retest, changed) {
+            (Some(_), Some(flags)) => bvh.refit_changed(tris, edges, xb, flags),
+            _ => bvh.refit(tris, edges, xa, xb, margin, swept),
+        }
         bvh.pairs(
             tris,
             edges,
@@ -157,11 +170,13 @@ impl SelfCollider {
     }
 }
 
-/// `out[i] = xb[i] - u`, `u` the mean of `xb - xa` (unchanged where that is not finite).
-fn in_mean_frame(out: &mut Vec<Vec3>, xa: &[Vec3], xb: &[Vec3]) {
+/// The mean of `xb - xa` (zero where that is not finite).
+fn mean_motion(xa: &[Vec3], xb: &[Vec3]) -> Vec3 {
     let n = xa.len().max(1) as f64;
     let u = xa.iter().zip(xb).map(|(a, b)| *b - *a).sum::<Vec3>() / n;
-    let u = if u.is_finite() { u } else { Vec3::ZERO };
-    out.clear();
-    out.extend(xb.iter().map(|b| *b - u));
+    if u.is_finite() {
+        u
+    } else {
+        Vec3::ZERO
+    }
 }
