@@ -35,12 +35,10 @@ pub(crate) struct SelfCollider {
     pub(super) ccd_changed: Changed,
     pub(super) pairs: Vec<(u32, u32)>,
     pub(super) pairs_ee: Vec<(u32, u32)>,
-    /// A proximity broad phase's vertex-triangle pairs near in the rest shape (`rest`), by
-    /// vertex, then triangle.
-    pub(super) pairs_near: Vec<(u32, u32)>,
-    /// A repulsion pass's vertex-triangle candidates: the broad phase's and the near ones
-    /// (flagged), in (vertex, triangle) order.
-    pub(super) rep_pairs: Vec<(u32, u32, bool)>,
+    /// A repulsion pass's vertex-triangle answers, keyed by their pair, before they are merged
+    /// in order with the near pairs' (`proximity::near_answers`).
+    pub(super) found_vt: Vec<((u32, u32), Correction)>,
+    pub(super) found_near: Vec<((u32, u32), Correction)>,
     pub(super) w: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
@@ -112,8 +110,8 @@ impl SelfCollider {
             ccd_changed: Changed::default(),
             pairs: Vec::new(),
             pairs_ee: Vec::new(),
-            pairs_near: Vec::new(),
-            rep_pairs: Vec::new(),
+            found_vt: Vec::new(),
+            found_near: Vec::new(),
             w: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),

@@ -131,18 +131,9 @@ impl SelfCollider {
         );
         if proximity {
             // The pairs proximity answers in the cloth's plane, which a cone may have culled.
-            // Near vertex-triangle pairs apart: sorted as listed, and tested by a kernel of
-            // their own (`proximity::near_close`).
-            let (pairs, pairs_ee) = (&mut self.pairs_near, &mut self.pairs_ee);
-            pairs.clear();
-            for v in 0..n.min(rest.near_vt.rows()) {
-                for &t in rest.near_vt.row(v) {
-                    let v = v as u32;
-                    if bvh.vt_overlap(v, t) && !across_seam(bits, &[v], &tris[t as usize]) {
-                        pairs.push((v, t));
-                    }
-                }
-            }
+            // Vertex-triangle ones are read from the rest lists by the repulsion passes
+            // (`proximity::near_answers`).
+            let pairs_ee = &mut self.pairs_ee;
             if with_edges {
                 for e in 0..edges.len().min(rest.near_ee.rows()) {
                     for &f in rest.near_ee.row(e) {
@@ -163,9 +154,6 @@ impl SelfCollider {
         self.pairs.par_sort_unstable();
         self.pairs_ee.par_sort_unstable();
         self.report.candidates += self.pairs.len() + self.pairs_ee.len();
-        if proximity {
-            self.report.candidates += self.pairs_near.len();
-        }
         self.report.node_tests += bvh.node_tests;
     }
 }
