@@ -15,8 +15,7 @@
 //! a bit are skipped by every self-contact query until the weld makes them one piece.
 
 use super::collider::{shares_vertex, SelfCollider};
-use super::proximity::FOLD_ARC;
-use super::rest::RestShape;
+use super::rest::{RestShape, FOLD_ARC};
 use crate::collide::narrow;
 use crate::Vec3;
 use rayon::prelude::*;

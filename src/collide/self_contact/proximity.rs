@@ -5,6 +5,7 @@ use super::changed::any_of;
 use super::collider::{ee_vertices, vt_vertices, SelfCollider};
 use super::exempt::across_seam;
 use super::jacobi::Correction;
+use super::rest::FOLD_ARC;
 use super::stencil::Stencil;
 use crate::collide::narrow;
 use crate::Vec3;
@@ -27,9 +28,6 @@ const PUSH_CAP: f64 = 1.0 / 3.0;
 /// by its own pair and, a little, by the layer's vertices' pairs with its triangles): one pass
 /// left two sheets dropped on each other 2.5 mm into a 6 mm contact distance.
 pub(super) const SETTLED: f64 = 1e-2;
-
-/// The shortest fold that holds two layers a contact distance apart, over that distance.
-pub(super) const FOLD_ARC: f64 = std::f64::consts::FRAC_PI_2;
 
 impl SelfCollider {
     /// One pass of proximity repulsion (Jacobi, averaged) on the candidates of a fresh broad

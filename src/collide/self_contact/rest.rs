@@ -1,6 +1,10 @@
 //! The rest shape's close pairs, as sorted lists per element (built by `exempt`, read by the
 //! broad phase).
 
+/// The shortest fold that holds two layers a contact distance apart, over that distance: pairs
+/// nearer than this many contact distances at rest are near (`RestShape::near_vt`).
+pub(super) const FOLD_ARC: f64 = std::f64::consts::FRAC_PI_2;
+
 /// Sorted lists per element (CSR): `items[start[k]..start[k + 1]]`.
 #[derive(Default)]
 pub(super) struct Csr {
