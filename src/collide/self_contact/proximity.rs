@@ -169,9 +169,9 @@ impl SelfCollider {
                     let v = v as u32;
                     for &t in rest.near_vt.row(v as usize) {
                         let tri = &self.triangles[t as usize];
-                        if !bvh.vt_overlap(v, t)
+                        if !anew(&vt_vertices(&self.triangles, v, t))
+                            || !bvh.vt_overlap(v, t)
                             || across_seam(&self.seam_bits, &[v], tri)
-                            || !anew(&vt_vertices(&self.triangles, v, t))
                         {
                             continue;
                         }
