@@ -3,7 +3,7 @@
 
 use super::bvh::TopologyBvh;
 use super::changed::Changed;
-use super::jacobi::{Correction, JacobiPass};
+use super::jacobi::{Correction, JacobiPass, Keyed};
 use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
@@ -37,8 +37,8 @@ pub(crate) struct SelfCollider {
     pub(super) pairs_ee: Vec<(u32, u32)>,
     /// A repulsion pass's vertex-triangle answers, keyed by their pair, before they are merged
     /// in order with the near pairs' (`proximity::near_answers`).
-    pub(super) found_vt: Vec<((u32, u32), Correction)>,
-    pub(super) found_near: Vec<((u32, u32), Correction)>,
+    pub(super) found_vt: Vec<Keyed>,
+    pub(super) found_near: Vec<Keyed>,
     pub(super) w: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,

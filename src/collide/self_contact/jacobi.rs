@@ -64,6 +64,9 @@ impl Averaged {
     }
 }
 
+/// A vertex-triangle pair's answer with its pair, the key the passes merge answers by.
+pub(super) type Keyed = ((u32, u32), Correction);
+
 /// One pair's answer, computed on the pass's start state: its stencil, the change of its
 /// positions' and of its velocities' weighted sum.
 #[derive(Clone, Copy)]

@@ -4,7 +4,7 @@
 use super::changed::any_of;
 use super::collider::{ee_vertices, vt_vertices, SelfCollider};
 use super::exempt::across_seam;
-use super::jacobi::Correction;
+use super::jacobi::{Correction, Keyed};
 use super::rest::FOLD_ARC;
 use super::stencil::Stencil;
 use crate::collide::narrow;
@@ -151,7 +151,7 @@ impl SelfCollider {
         &self,
         test: impl Fn(u32, u32) -> Option<Correction> + Sync,
         anew: &(impl Fn(&[u32]) -> bool + Sync),
-        out: &mut Vec<((u32, u32), Correction)>,
+        out: &mut Vec<Keyed>,
     ) -> usize {
         const CHUNK: usize = 128;
         let (Some(rest), Some(bvh)) = (self.rest.as_ref(), self.bvh.as_ref()) else {
@@ -161,7 +161,7 @@ impl SelfCollider {
             .near_vt
             .rows()
             .min(self.nbr_start.len().saturating_sub(1));
-        let chunks: Vec<(usize, Vec<((u32, u32), Correction)>)> = (0..rows.div_ceil(CHUNK))
+        let chunks: Vec<(usize, Vec<Keyed>)> = (0..rows.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let (mut tested, mut found) = (0, Vec::new());
@@ -417,11 +417,7 @@ impl SelfCollider {
 }
 
 /// The answers of two lists, each in key order, merged in key order (keys are distinct).
-fn merge_by_key(
-    a: &[((u32, u32), Correction)],
-    b: &[((u32, u32), Correction)],
-    out: &mut Vec<Correction>,
-) {
+fn merge_by_key(a: &[Keyed], b: &[Keyed], out: &mut Vec<Correction>) {
     out.reserve(a.len() + b.len());
     let (mut i, mut j) = (0, 0);
     while i < a.len() || j < b.len() {
