@@ -307,14 +307,7 @@ impl TopologyBvh {
             self.xb.extend_from_slice(&xb[..n]);
         }
         self.vbox.clear();
-        self.vbox.extend((0..n).map(|i| {
-            let b = Aabb::from_points(&[xa[i], xb[i]], 0.0);
-            if b.lo.is_finite() && b.hi.is_finite() {
-                b
-            } else {
-                Aabb::EMPTY
-            }
-        }));
+        self.vbox.extend((0..n).map(|i| swept_box(xa[i], xb[i])));
         self.margin.clear();
         self.margin.extend((0..n).map(&margin));
         let vb = &self.vbox;
@@ -370,12 +363,7 @@ impl TopologyBvh {
         let n = self.xb.len().min(xb.len()).min(changed.len());
         for i in (0..n).filter(|&i| changed[i]) {
             self.xb[i] = xb[i];
-            let b = Aabb::from_points(&[self.xa[i], xb[i]], 0.0);
-            self.vbox[i] = if b.lo.is_finite() && b.hi.is_finite() {
-                b
-            } else {
-                Aabb::EMPTY
-            };
+            self.vbox[i] = swept_box(self.xa[i], xb[i]);
         }
         let hit = |i: u32| changed.get(i as usize).copied().unwrap_or(true);
         let get = |vb: &[Aabb], i: u32| vb.get(i as usize).copied().unwrap_or(Aabb::EMPTY);
@@ -815,6 +803,16 @@ where
     rayon::join(|| a(out, tests), || b(&mut ob, &mut tb));
     out.append(&mut ob);
     *tests += tb;
+}
+
+/// A vertex's box over its motion `a -> b`: empty where that is not finite.
+fn swept_box(a: Vec3, b: Vec3) -> Aabb {
+    let bx = Aabb::from_points(&[a, b], 0.0);
+    if bx.lo.is_finite() && bx.hi.is_finite() {
+        bx
+    } else {
+        Aabb::EMPTY
+    }
 }
 
 /// The box of an element from its vertices' boxes: empty where one is (a non-finite vertex
