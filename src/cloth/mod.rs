@@ -170,6 +170,32 @@ impl Cloth {
         inv
     }
 
+    /// Largest relative stretch `|x_i - x_j| / |uv_i - uv_j| - 1` over the triangle edges (0 at
+    /// rest length; edges of zero rest length are skipped), as recordings and the hard cases
+    /// report it.
+    pub fn max_edge_stretch(&self) -> f64 {
+        let mut worst = f64::NEG_INFINITY;
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (i, j) = (t[k] as usize, t[(k + 1) % 3] as usize);
+                let (Some(xi), Some(xj), Some(ui), Some(uj)) =
+                    (self.x.get(i), self.x.get(j), self.uv.get(i), self.uv.get(j))
+                else {
+                    continue;
+                };
+                let rest = ui.distance(*uj);
+                if rest > 0.0 {
+                    worst = worst.max(xi.distance(*xj) / rest - 1.0);
+                }
+            }
+        }
+        if worst.is_finite() {
+            worst
+        } else {
+            0.0
+        }
+    }
+
     /// Area-weighted vertex normals (unit; zero for isolated vertices).
     pub fn vertex_normals(&self) -> Vec<Vec3> {
         let mut n = vec![Vec3::ZERO; self.len()];

@@ -13,6 +13,7 @@
 mod broad;
 mod contact;
 mod error;
+mod exit;
 mod features;
 mod feedback;
 pub mod held;

@@ -2,13 +2,20 @@
 //! thickness is centred between them.
 
 use super::contact::Contact;
+use super::exit::{exit_of, Exit};
 use super::obstacle::Obstacle;
 use crate::Vec3;
 
 /// The contacts sorted by vertex (contact order kept within a vertex), for the passes that
-/// look at all of one vertex's contacts together.
-pub(super) fn contacts_by_vertex(contacts: &[Contact]) -> Vec<Contact> {
-    let mut by_vertex = contacts.to_vec();
+/// look at all of one vertex's contacts together. A vertex on its way out of an obstacle it
+/// started inside is not pressed against that obstacle's surface: its lead-out contact stays
+/// out (a wedge with the palm projected a vertex leaving a finger out of the finger's side at
+/// once, and its edge to the next finger's vertex to 2.2x rest).
+pub(super) fn contacts_by_vertex(contacts: &[Contact], exits: &[Exit]) -> Vec<Contact> {
+    let mut by_vertex: Vec<Contact> = (contacts.iter())
+        .filter(|c| exit_of(exits, c.vertex as usize, c.obstacle).is_none())
+        .copied()
+        .collect();
     by_vertex.sort_by_key(|c| c.vertex);
     by_vertex
 }

@@ -10,7 +10,8 @@ pub struct CollisionReport {
     /// summed over the detection passes.
     pub feature_contacts: usize,
     /// Deepest remaining penetration of a contact vertex into an obstacle's thickness layer after
-    /// the response (m, >= 0).
+    /// the response (m, >= 0); not of cloth the scene started inside an obstacle while it is
+    /// led out (`exiting`).
     pub deepest_penetration: f64,
     /// Exact count of intersecting non-adjacent triangle pairs at the end of the step, when
     /// `count_self_intersections` is on and self-collision is enabled.
@@ -23,6 +24,9 @@ pub struct CollisionReport {
     /// Obstacles skipped because their swept bounds are far from the cloth's (see
     /// [`super::CollisionStage::set_culling`]).
     pub culled: usize,
+    /// Vertices that started inside a solid obstacle and are still on their way out (see
+    /// [`super::CollisionStage::plan_exits`]).
+    pub exiting: usize,
     /// Wall time of `resolve`.
     pub time_s: f64,
 }

@@ -4,6 +4,7 @@
 //! obstacles again, then its CCD again), then the penetration metric.
 
 use super::contact::Contact;
+use super::exit::exit_of;
 use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
@@ -41,7 +42,7 @@ impl CollisionStage {
         let max_th = self.thickness.iter().copied().fold(0.0, f64::max);
         let culled = self.cull(&x0[..n], &x1[..n], max_th);
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, None);
-        let by_vertex = contacts_by_vertex(&self.contacts);
+        let by_vertex = contacts_by_vertex(&self.contacts, &self.exits);
         let (obs, th) = (&self.obstacles, &self.thickness);
         let pinched = center_pinched(obs, th, &by_vertex, x0, x1, v1, n);
         separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
@@ -60,6 +61,7 @@ impl CollisionStage {
             mode,
             friction_solved: feedback.friction_solved_all(),
             sprung: feedback.sprung(),
+            exits: &self.exits,
         };
         self.feature_contacts.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);
@@ -101,7 +103,7 @@ impl CollisionStage {
             for (flag, &m) in self.in_contact.iter_mut().zip(&moved) {
                 *flag |= m;
             }
-            let by_vertex = contacts_by_vertex(&self.contacts);
+            let by_vertex = contacts_by_vertex(&self.contacts, &self.exits);
             let (obs, th) = (&self.obstacles, &self.thickness);
             let pinched = center_pinched(obs, th, &by_vertex, x0, x1, v1, n);
             separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
@@ -115,9 +117,12 @@ impl CollisionStage {
             self.self_collider = Some(sc);
         }
 
-        // Penetration after the whole response, measured on contact vertices.
+        // Penetration after the whole response, measured on contact vertices; cloth the scene
+        // started inside an obstacle is not the step's penetration while it is led out (it is
+        // counted as `exiting` instead).
         let mut deepest: f64 = 0.0;
-        for c in &self.contacts {
+        let led_out = |c: &&Contact| exit_of(&self.exits, c.vertex as usize, c.obstacle).is_some();
+        for c in self.contacts.iter().filter(|c| !led_out(c)) {
             let o = &self.obstacles[c.obstacle];
             let i = c.vertex as usize;
             let local = o.pose.inverse_transform_point(x1[i]);
@@ -131,6 +136,8 @@ impl CollisionStage {
         if self.self_collider.is_some() {
             deepest = deepest.max(self.self_moved_penetration(x0, x1, n));
         }
+        self.retire_exits(&x1[..n], &inv_mass[..n]);
+        report.exiting = self.exits.len();
         report.contacts = self.contacts.len();
         report.deepest_penetration = deepest.max(0.0);
         report.time_s = start.elapsed().as_secs_f64();
@@ -256,7 +263,10 @@ impl CollisionStage {
                 continue;
             }
             let (lo, hi) = o.swept_aabb(max_th);
-            for i in (0..n).filter(|&i| moved.get(i).copied().unwrap_or(false)) {
+            let judged = |i: usize| {
+                moved.get(i).copied().unwrap_or(false) && exit_of(&self.exits, i, oi).is_none()
+            };
+            for i in (0..n).filter(|&i| judged(i)) {
                 let p = x1[i];
                 if p.cmplt(lo).any() || p.cmpgt(hi).any() {
                     continue;

@@ -38,6 +38,9 @@ pub(crate) struct VertexInput {
     /// Normals of the surfaces whose friction the solver applied already (zero: unused): their
     /// contacts keep the tangential velocity it left.
     pub friction_solved: [Vec3; 3],
+    /// (direction in the obstacle's frame, most it moves per pass) when the vertex started
+    /// inside this obstacle and is on its way out (`overlap.rs`).
+    pub exit: Option<(Vec3, f64)>,
 }
 
 /// Detects and answers one vertex against one obstacle, updating `x` (end position) and `v`.
@@ -51,6 +54,20 @@ pub(crate) fn obstacle_vertex(
     let th = inp.thickness;
     let a = o.pose_prev.inverse_transform_point(inp.x0);
     let mut p = o.pose.inverse_transform_point(*x);
+    if let Some((dir, cap)) = inp.exit {
+        if let Some(depth) = o.exit_along(p, dir) {
+            return Some(lead_out(
+                o,
+                obstacle,
+                inp,
+                dir,
+                (depth + th).min(cap),
+                p,
+                x,
+                v,
+            ));
+        }
+    }
     // (local contact point, local normal) of the last correction.
     let mut contact: Option<(Vec3, Vec3)> = None;
 
@@ -122,4 +139,37 @@ pub(crate) fn obstacle_vertex(
         surface_velocity,
         obstacle,
     })
+}
+
+/// A vertex that started inside `o`, moved `step` along `dir` (local) on its way out: a push by
+/// position that adds no speed, with the approaching normal velocity removed so the next solve
+/// holds it against going back in. No friction: it slides out along the plan.
+#[allow(clippy::too_many_arguments)]
+fn lead_out(
+    o: &Obstacle,
+    obstacle: usize,
+    inp: &VertexInput,
+    dir: Vec3,
+    step: f64,
+    p: Vec3,
+    x: &mut Vec3,
+    v: &mut Vec3,
+) -> Contact {
+    let p = p + dir * step;
+    *x = o.pose.transform_point(p);
+    let n = o.pose.transform_vector(dir);
+    let surface_velocity = if inp.h > 0.0 {
+        (*x - o.pose_prev.transform_point(p)) / inp.h
+    } else {
+        Vec3::ZERO
+    };
+    let rel = *v - surface_velocity;
+    let vn = rel.dot(n);
+    *v -= n * vn.min(0.0);
+    Contact {
+        vertex: inp.vertex,
+        normal: n,
+        surface_velocity,
+        obstacle,
+    }
 }

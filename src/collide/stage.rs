@@ -6,6 +6,7 @@
 use super::broad::Aabb;
 use super::contact::Contact;
 use super::error::StageError;
+use super::exit::Exit;
 use super::features::{FeatureCollider, FeatureContact, Features};
 use super::obstacle::Obstacle;
 use super::self_contact::SelfCollider;
@@ -45,6 +46,9 @@ pub struct CollisionStage {
     pub(super) near: Vec<bool>,
     /// The last `resolve`'s contacts of static obstacles' edges and corners.
     pub(super) feature_contacts: Vec<FeatureContact>,
+    /// Vertices that started inside a solid obstacle and are not out yet, sorted by vertex
+    /// (`overlap.rs`).
+    pub(super) exits: Vec<Exit>,
 }
 
 impl CollisionStage {
@@ -110,6 +114,7 @@ impl CollisionStage {
             self_collider,
             culling: true,
             near: Vec::new(),
+            exits: Vec::new(),
         })
     }
 

@@ -2,6 +2,7 @@
 //! box against every near obstacle, answered by [`super::respond::obstacle_vertex`].
 
 use super::broad::Aabb;
+use super::exit::exit_of;
 use super::feedback::SolverFeedback;
 use super::respond::{obstacle_vertex, VertexInput};
 use super::stage::CollisionStage;
@@ -103,6 +104,7 @@ impl CollisionStage {
             let (olo, ohi) = o.swept_aabb(max_th);
             let ob = Aabb { lo: olo, hi: ohi };
             let friction = &self.friction;
+            let exits = &self.exits;
             let boxes = &self.vertex_boxes;
             // Skipped vertices carry the empty box, which an unbounded box would still "overlap".
             let meets = |i: usize| boxes[i].lo.cmple(boxes[i].hi).all() && boxes[i].overlaps(&ob);
@@ -143,6 +145,7 @@ impl CollisionStage {
                                 .get(i)
                                 .copied()
                                 .unwrap_or([Vec3::ZERO; 3]),
+                            exit: exit_of(exits, i, oi).map(|e| (e.dir, e.cap)),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;

@@ -34,6 +34,8 @@ pub struct FrameQuality {
     /// Obstacle contacts at the end of the last step.
     pub contacts: usize,
     pub unresolved_contacts: usize,
+    /// Vertices still on their way out of an obstacle the cloth started inside (last step).
+    pub exiting_vertices: usize,
     pub deepest_penetration: f64,
     /// Largest relative edge stretch at the frame (0 at rest length).
     pub max_edge_stretch: f64,
@@ -58,6 +60,7 @@ impl FrameQuality {
         self.cg_residual_max = self.cg_residual_max.max(m.cg_residual_max);
         self.contacts = m.contacts;
         self.unresolved_contacts = m.unresolved_contacts;
+        self.exiting_vertices = m.exiting_vertices;
         self.deepest_penetration = self.deepest_penetration.max(m.deepest_penetration);
         self.self_intersections = m.self_intersections;
         self.kinetic_energy = m.kinetic_energy;
@@ -93,6 +96,14 @@ impl FrameQuality {
             (
                 DiagnosticStatus::WARN,
                 format!("{} substeps subdivided for stability", self.subdivisions),
+            )
+        } else if self.exiting_vertices > 0 {
+            (
+                DiagnosticStatus::WARN,
+                format!(
+                    "{} cloth vertices still on their way out of an obstacle they started inside",
+                    self.exiting_vertices
+                ),
             )
         } else {
             (DiagnosticStatus::OK, "ok".to_string())
@@ -132,6 +143,10 @@ impl FrameQuality {
         if let Some(n) = self.self_intersections {
             values.push(kv("self_intersections", n.to_string()));
         }
+        // Only while there are any: bags of scenes that start clear keep their bytes.
+        if self.exiting_vertices > 0 {
+            values.push(kv("exiting_vertices", self.exiting_vertices.to_string()));
+        }
         if wall_time {
             values.push(kv(
                 "step_wall_time_ms",
@@ -154,29 +169,7 @@ impl FrameQuality {
 /// Largest `|x_i - x_j| / |uv_i - uv_j| - 1` over the triangle edges (0 for no cloth); edges of
 /// zero rest length are skipped.
 pub fn max_edge_stretch(cloth: &Cloth) -> f64 {
-    let mut worst = f64::NEG_INFINITY;
-    for t in &cloth.triangles {
-        for k in 0..3 {
-            let (i, j) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            let (Some(xi), Some(xj), Some(ui), Some(uj)) = (
-                cloth.x.get(i),
-                cloth.x.get(j),
-                cloth.uv.get(i),
-                cloth.uv.get(j),
-            ) else {
-                continue;
-            };
-            let rest = ui.distance(*uj);
-            if rest > 0.0 {
-                worst = worst.max(xi.distance(*xj) / rest - 1.0);
-            }
-        }
-    }
-    if worst.is_finite() {
-        worst
-    } else {
-        0.0
-    }
+    cloth.max_edge_stretch()
 }
 
 /// Totals over a whole recording, gathered frame by frame.

@@ -41,6 +41,9 @@ pub struct StepMetrics {
     pub collision_time_s: f64,
     /// Obstacles skipped by the collision stage as far from the cloth (last substep).
     pub culled_obstacles: usize,
+    /// Vertices that started inside a solid obstacle and are still on their way out (last
+    /// substep; see `CollisionStage::plan_exits`).
+    pub exiting_vertices: usize,
     /// Cloth-cloth counts summed over the substeps (largest zone: the largest seen).
     pub self_contact: SelfContactReport,
 }
@@ -68,6 +71,7 @@ impl StepMetrics {
         self.unresolved_contacts += r.unresolved;
         self.collision_time_s += r.time_s;
         self.culled_obstacles = r.culled;
+        self.exiting_vertices = r.exiting;
         self.self_contact.add(&r.self_contact);
     }
 }

@@ -68,9 +68,16 @@ impl Simulation {
     }
 
     /// Adds the collision stage (scenes without obstacles or self-collision have none).
-    pub fn set_collision(&mut self, stage: CollisionStage) {
+    /// Cloth that starts inside a solid obstacle is led out over the first steps, each patch
+    /// the way it came in (see [`CollisionStage::plan_exits`]).
+    pub fn set_collision(&mut self, mut stage: CollisionStage) {
         self.obstacle_targets = vec![None; stage.obstacles().len()];
+        stage.plan_exits(&self.cloth.x, &self.kinematic_vertices());
         self.collision = Some(stage);
+    }
+
+    fn kinematic_vertices(&self) -> Vec<u32> {
+        self.cloth.kinematic.iter().map(|(i, _)| *i).collect()
     }
 
     /// Starts a new phase with another cloth and effect set (a garment after welding): the
@@ -88,6 +95,10 @@ impl Simulation {
                 cloth.friction.clone(),
             )?;
             self.collision = Some(new);
+            let kinematic: Vec<u32> = cloth.kinematic.iter().map(|(i, _)| *i).collect();
+            if let Some(stage) = self.collision.as_mut() {
+                stage.plan_exits(&cloth.x, &kinematic);
+            }
         }
         self.integrator.prepare(&effects, cloth.len());
         self.coupling.replace_cloth(cloth.len());

@@ -8,6 +8,7 @@ use super::segment_edge::segment_edge_hits;
 use super::set::Features;
 use super::sweep::Sweep;
 use crate::collide::broad::{Aabb, SpatialHash};
+use crate::collide::exit::is_exiting;
 use crate::collide::obstacle::Obstacle;
 use crate::collide::settings::DetectionMode;
 use crate::Vec3;
@@ -65,6 +66,16 @@ impl FeatureCollider {
             tri_edges,
             ..Self::default()
         }
+    }
+
+    /// The cloth's triangles.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The cloth's mesh edges, each once (`[low, high]`, sorted).
+    pub fn edges(&self) -> &[[u32; 2]] {
+        &self.edges
     }
 
     /// Detects and answers feature contacts of obstacle `o` (index `obstacle`) over the step, updating `x1`, `v1`.
@@ -155,6 +166,7 @@ impl FeatureCollider {
                     let t = triangles[k as usize];
                     if t.iter().any(|&v| v as usize >= n)
                         || (only_dirty && !t.iter().any(|&v| dirty[v as usize]))
+                        || t.iter().any(|&v| is_exiting(s.exits, v as usize))
                     {
                         return false;
                     }
@@ -175,6 +187,11 @@ impl FeatureCollider {
         }
         self.cand_edges.sort_unstable();
         self.cand_edges.dedup();
+        if !s.exits.is_empty() {
+            let edges = &self.edges;
+            self.cand_edges
+                .retain(|&k| (edges[k as usize].iter()).all(|&v| !is_exiting(s.exits, v as usize)));
+        }
         if only_dirty {
             let (edges, dirty) = (&self.edges, &self.dirty);
             self.cand_edges

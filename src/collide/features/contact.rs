@@ -1,6 +1,7 @@
 //! Feature contacts: the CCD's hits, the cloth state the passes share, and the contacts of
 //! static obstacles handed to the solver.
 
+use crate::collide::exit::Exit;
 use crate::collide::settings::DetectionMode;
 use crate::Vec3;
 
@@ -28,6 +29,10 @@ pub(crate) struct ClothState<'a> {
     pub friction_solved: &'a [[Vec3; 3]],
     /// The cloth faces and edges the solver held with an edge spring this step (sorted).
     pub sprung: &'a [[u32; 3]],
+    /// Vertices on their way out of an obstacle they started inside (`overlap.rs`): features
+    /// skip their faces and edges, which cross the obstacle by construction (the arm's rod axes
+    /// and box edges pushed those patches out sideways at once, 3.5x rest).
+    pub exits: &'a [Exit],
 }
 
 /// A contact of an obstacle's edge, corner or rod axis with the cloth, for the implicit solver

@@ -135,6 +135,24 @@ impl Obstacle {
         }
     }
 
+    /// How far local point `p`, inside a solid, must travel along unit `dir` to leave it (the
+    /// farthest crossing of the ray: a concave mesh solid is left for good); `None` when `p` is
+    /// not inside or the ray never leaves (a half-space `dir` points into).
+    pub(crate) fn exit_along(&self, p: Vec3, dir: Vec3) -> Option<f64> {
+        if !self.contains_local(p) {
+            return None;
+        }
+        if let Geom::HalfSpace { normal } = self.geom {
+            let along = normal.dot(dir);
+            return (along > 1e-9).then(|| -normal.dot(p) / along);
+        }
+        // From beyond the bounding box back to `p`: the first crossing from outside.
+        let reach = (self.local_max - self.local_min).length() + (p - self.local_min).length();
+        let far = p + dir * (2.0 * reach + 1.0);
+        let hit = self.cast_local(far, p)?;
+        Some((hit.point - p).dot(dir).max(0.0))
+    }
+
     /// First time the local segment `a -> b` crosses the surface from outside (t in [0, 1]).
     pub(crate) fn cast_local(&self, a: Vec3, b: Vec3) -> Option<SurfaceHit> {
         let d = b - a;
