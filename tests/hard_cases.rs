@@ -61,6 +61,7 @@ cases!(
     crumple_heap,
     degenerate_mesh,
     pinned_inside_obstacle,
+    cape_hem_inside_base,
     wind_50_m_s,
     long_run_10_min,
     self_towel_shaken_at_velocity_limits,

@@ -189,6 +189,27 @@ fn config(name: &str) -> Scene {
     Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A scene of one grid cloth of the issue's material (200 g/m^2, stretch 1000 N/m) at 60 Hz with
+/// two substeps, `cloth` its grid (and pins) lines, `obstacle` its one obstacle.
+fn scene(name: &str, cloth: &str, obstacle: &str) -> Scene {
+    let yaml = format!(
+        r#"
+name: {name}
+duration: 1.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.016666666666666666, substeps: 2 }}
+cloths:
+  - name: sheet
+{cloth}
+    material: {{ density: 0.2, stretch: 1000.0, shear: 100.0, bend_warp: 1.0e-5, bend_weft: 1.0e-5, damping: {{ spring: 0.05, air: 0.1 }}, thickness: 0.005, friction: 0.3 }}
+obstacles:
+  - {obstacle}
+collision: {{ mode: continuous }}
+"#
+    );
+    Scene::from_yaml(&yaml, name).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// The lead-out moves a vertex at most a sixth of its shortest edge per pass (`overlap.rs`).
 const EXIT_STEP: f64 = 1.0 / 6.0;
 const STRETCH: f64 = 1.0 + 2.0 * EXIT_STEP;
@@ -212,20 +233,11 @@ fn a_cape_hem_inside_the_base_leaves_it_upwards_without_tearing() {
 /// the way its edges cross the sphere, then the sheet drapes on it.
 #[test]
 fn a_sheet_through_a_sphere_leaves_it_upwards() {
-    let yaml = r#"
-name: through_sphere
-duration: 1.0
-effects: [gravity, stretch, shear, bending, damping]
-solver: { integrator: implicit, dt: 0.016666666666666666, substeps: 2 }
-cloths:
-  - name: sheet
-    grid: { size: [1.0, 1.0], resolution: [25, 25], pose: { xyz: [0.0, 0.0, 0.6] } }
-    material: { density: 0.2, stretch: 1000.0, shear: 100.0, bend_warp: 1.0e-5, bend_weft: 1.0e-5, damping: { spring: 0.05, air: 0.1 }, thickness: 0.005, friction: 0.3 }
-obstacles:
-  - { name: ball, shape: { type: sphere, radius: 0.3 }, pose: { xyz: [0, 0, 0.45] } }
-collision: { mode: continuous }
-"#;
-    let scene = Scene::from_yaml(yaml, "through_sphere").unwrap();
+    let scene = scene(
+        "through_sphere",
+        "    grid: { size: [1.0, 1.0], resolution: [25, 25], pose: { xyz: [0.0, 0.0, 0.6] } }",
+        "{ name: ball, shape: { type: sphere, radius: 0.3 }, pose: { xyz: [0, 0, 0.45] } }",
+    );
     let j = run(&scene, 1.0, |_, _| true);
     accept("sphere", &j, 15, STRETCH);
 }
@@ -269,21 +281,12 @@ fn an_arm_lying_in_a_cloth_leaves_it_without_tearing() {
 /// leave through the top face, the way the towel enters it.
 #[test]
 fn a_towel_hanging_into_a_table_leaves_through_its_top() {
-    let yaml = r#"
-name: towel_in_table
-duration: 1.0
-effects: [gravity, stretch, shear, bending, damping]
-solver: { integrator: implicit, dt: 0.016666666666666666, substeps: 2 }
-cloths:
-  - name: towel
-    grid: { size: [0.5, 0.5], resolution: [21, 21], pose: { xyz: [0.0, 0.0, 0.81], rpy: [1.5707963267948966, 0.0, 0.0] } }
-    material: { density: 0.2, stretch: 1000.0, shear: 100.0, bend_warp: 1.0e-5, bend_weft: 1.0e-5, damping: { spring: 0.05, air: 0.1 }, thickness: 0.005, friction: 0.3 }
-    pins: [ { region: top_left }, { region: top_right } ]
-obstacles:
-  - { name: table, shape: { type: box, half_extents: [0.4, 0.4, 0.3] }, pose: { xyz: [0.0, 0.0, 0.3] } }
-collision: { mode: continuous }
-"#;
-    let scene = Scene::from_yaml(yaml, "towel_in_table").unwrap();
+    let scene = scene(
+        "towel_in_table",
+        "    grid: { size: [0.5, 0.5], resolution: [21, 21], pose: { xyz: [0.0, 0.0, 0.81], rpy: [1.5707963267948966, 0.0, 0.0] } }
+    pins: [ { region: top_left }, { region: top_right } ]",
+        "{ name: table, shape: { type: box, half_extents: [0.4, 0.4, 0.3] }, pose: { xyz: [0.0, 0.0, 0.3] } }",
+    );
     let j = run(&scene, 1.0, |_, _| true);
     accept("towel", &j, 15, STRETCH);
 }
@@ -292,20 +295,11 @@ collision: { mode: continuous }
 /// leave along its normal.
 #[test]
 fn a_sheet_tilted_into_the_ground_leaves_it_along_its_normal() {
-    let yaml = r#"
-name: into_ground
-duration: 1.0
-effects: [gravity, stretch, shear, bending, damping]
-solver: { integrator: implicit, dt: 0.016666666666666666, substeps: 2 }
-cloths:
-  - name: sheet
-    grid: { size: [0.5, 0.5], resolution: [21, 21], pose: { xyz: [0.0, 0.0, 0.045], rpy: [0.35, 0.0, 0.0] } }
-    material: { density: 0.2, stretch: 1000.0, shear: 100.0, bend_warp: 1.0e-5, bend_weft: 1.0e-5, damping: { spring: 0.05, air: 0.1 }, thickness: 0.005, friction: 0.3 }
-obstacles:
-  - { name: ground, shape: { type: plane, normal: [0.0, 0.0, 1.0] } }
-collision: { mode: continuous }
-"#;
-    let scene = Scene::from_yaml(yaml, "into_ground").unwrap();
+    let scene = scene(
+        "into_ground",
+        "    grid: { size: [0.5, 0.5], resolution: [21, 21], pose: { xyz: [0.0, 0.0, 0.045], rpy: [0.35, 0.0, 0.0] } }",
+        "{ name: ground, shape: { type: plane, normal: [0.0, 0.0, 1.0] } }",
+    );
     let j = run(&scene, 1.0, |_, _| true);
     accept("ground", &j, 15, STRETCH);
 }

@@ -3,7 +3,7 @@
 //! the parser and the builder are part of what is tested) or, for degenerate geometry the scene
 //! format cannot express, from a hand-made mesh. Bounds are derived in the comments next to them.
 
-use super::edge::{degenerate_mesh, long_run, pinned_inside_obstacle, wind};
+use super::edge::{cape_hem_inside_base, degenerate_mesh, long_run, pinned_inside_obstacle, wind};
 use super::fast_links::rod_through_sheet;
 use super::hanging::{
     heavy_cloth, huge_cloth, light_cloth, stiff_explicit_near_limit, stiff_explicit_over_limit,
@@ -33,6 +33,7 @@ pub fn catalogue() -> Vec<(&'static str, CaseFn)> {
         ("crumple_heap", crumple),
         ("degenerate_mesh", degenerate_mesh),
         ("pinned_inside_obstacle", pinned_inside_obstacle),
+        ("cape_hem_inside_base", cape_hem_inside_base),
         ("wind_50_m_s", wind),
         ("long_run_10_min", long_run),
         ("self_towel_shaken_at_velocity_limits", towel_shaken),

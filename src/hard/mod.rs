@@ -52,6 +52,9 @@ pub struct Criteria {
     pub energy: EnergyCheck,
     /// Deepest penetration into an obstacle's thickness layer (m).
     pub max_penetration: Option<f64>,
+    /// Largest edge length over its rest length at any frame end (a bound the case derives
+    /// from its material and speeds, e.g. `1 + v / c` for an impact at `v`).
+    pub max_stretch: Option<f64>,
     /// Intersecting non-adjacent triangle pairs at the end of any step.
     pub max_self_intersections: Option<usize>,
     /// Distance of a pinned/attached vertex from its target after a step (m).
@@ -60,7 +63,8 @@ pub struct Criteria {
     /// second and the last tenth of the run.
     pub max_energy_creep: Option<f64>,
     /// Frames after which the energy reference `E(0)` is taken (0: the initial state). A case that
-    /// starts infeasible (cloth inside an obstacle) pays the projection out of it once.
+    /// starts infeasible (cloth inside an obstacle) pays the lead-out of it once: the reference
+    /// is then the first frame from this one on that ends with no vertex on its way out.
     pub energy_from_frame: usize,
     /// Whether the guard must subdivide at least once (the case is built to need it).
     pub expect_subdivisions: bool,
@@ -74,6 +78,7 @@ impl Criteria {
             max_speed,
             energy: EnergyCheck::Bounded { margin: 0.05 },
             max_penetration: None,
+            max_stretch: None,
             max_self_intersections: None,
             // Kinematic vertices are reset onto their targets every substep: only round-off remains.
             max_attached_drift: 1e-9,

@@ -32,21 +32,22 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
         s,
         "Worst values over every frame. Energy excess: `max_t (E(t) - E(0) - W_ext(t)) / scale` \
          (negative: the cloth only lost energy; in parentheses where obstacles or contact corrections do \
-         work that is not measured: reported, not judged). Drift: \
+         work that is not measured: reported, not judged). Stretch: the largest triangle edge over \
+         its rest length at a frame end (judged where the case gives a bound). Drift: \
          distance of pinned/attached vertices from their targets. Creep: change of mean energy \
          between the second and the last tenth of the run, over `M g L`.\n"
     );
     let _ = writeln!(
         s,
         "| case | pass | verts | integrator, dt x sub | frames | max abs x (m) | max speed (m/s) | \
-         energy excess | penetration (m) | self-isect | drift (m) | creep | subdiv | unresolved | wall (s) |"
+         energy excess | penetration (m) | stretch (x rest) | self-isect | drift (m) | creep | subdiv | unresolved | wall (s) |"
     );
-    let _ = writeln!(s, "|{}", "---|".repeat(15));
+    let _ = writeln!(s, "|{}", "---|".repeat(16));
     for o in outcomes {
         let w = &o.worst;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} {:.3e} x {} | {} | {:.3} | {:.3} | {} | {:.2e} | {} | {:.1e} | {} | {} | {} | {:.1} |",
+            "| {} | {} | {} | {} {:.3e} x {} | {} | {:.3} | {:.3} | {} | {:.2e} | {:.3} | {} | {:.1e} | {} | {} | {} | {:.1} |",
             o.name,
             if o.passed() { "yes" } else { "**no**" },
             o.vertices,
@@ -62,6 +63,7 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
                 (Some(e), EnergyCheck::NotMeasured) => format!("({e:.2e})"),
             },
             w.max_penetration,
+            w.max_stretch,
             opt(w.max_self_intersections),
             w.max_attached_drift,
             w.energy_creep
@@ -97,6 +99,9 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
         }
         if let Some(p) = c.max_penetration {
             let _ = writeln!(s, "- penetration into the thickness layer <= {p} m");
+        }
+        if let Some(r) = c.max_stretch {
+            let _ = writeln!(s, "- largest edge <= {r:.3} x its rest length");
         }
         if let Some(n) = c.max_self_intersections {
             let _ = writeln!(s, "- self-intersecting triangle pairs <= {n}");

@@ -24,6 +24,8 @@ pub struct Worst {
     /// The energy scale the excess is relative to (J).
     pub energy_scale: f64,
     pub max_penetration: f64,
+    /// Largest edge length over rest length at a frame end.
+    pub max_stretch: f64,
     pub max_self_intersections: Option<usize>,
     pub max_attached_drift: f64,
     pub subdivisions: u64,
@@ -134,6 +136,7 @@ pub fn run_case(case: Case) -> Outcome {
     let dynamic0 = sim.energy().0 + sim.effects().energy_split(&sim.cloth.x).0;
     let gravity0 = gravity_scale(&sim);
     let mut work = 0.0;
+    let mut referenced = false;
     let mut peak_dynamic = dynamic0;
     let mut excess = f64::NEG_INFINITY;
     let mut energies = Vec::with_capacity(frames);
@@ -167,6 +170,7 @@ pub fn run_case(case: Case) -> Outcome {
             break;
         }
         w.max_abs_x = c.x.iter().map(|p| p.length()).fold(w.max_abs_x, f64::max);
+        w.max_stretch = w.max_stretch.max(1.0 + c.max_edge_stretch());
         w.max_speed = w.max_speed.max(m.max_speed);
         w.max_attached_drift = w.max_attached_drift.max(attached_drift(&sim));
         let e = m.kinetic_energy + m.potential_energy;
@@ -177,8 +181,14 @@ pub fn run_case(case: Case) -> Outcome {
             .sum();
         work += dw;
         peak_dynamic = peak_dynamic.max(m.kinetic_energy + sim.effects().energy_split(&c.x).0);
-        if frame + 1 == criteria.energy_from_frame {
-            (e_start, work) = (e, 0.0);
+        // A case that starts inside an obstacle pays its lead-out once: the reference is the
+        // first frame from `energy_from_frame` on that ends with every vertex out.
+        if !referenced
+            && criteria.energy_from_frame > 0
+            && frame + 1 >= criteria.energy_from_frame
+            && m.exiting_vertices == 0
+        {
+            (e_start, work, referenced) = (e, 0.0, true);
         }
         if e - e_start - work > excess {
             excess = e - e_start - work;
@@ -247,6 +257,14 @@ fn judge(c: &Criteria, w: &Worst, frames: usize) -> Vec<String> {
             f.push(format!(
                 "penetration {:.3e} m > {p:.3e} m",
                 w.max_penetration
+            ));
+        }
+    }
+    if let Some(limit) = c.max_stretch {
+        if w.max_stretch > limit {
+            f.push(format!(
+                "an edge stretched to {:.3} times its rest length > {limit:.3}",
+                w.max_stretch
             ));
         }
     }
