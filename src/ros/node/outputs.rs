@@ -21,6 +21,8 @@ pub struct DiagnosticsInput<'a> {
     pub step_time_max: f64,
     pub contacts: usize,
     pub deepest_penetration: f64,
+    /// Cloth vertices still on their way out of an obstacle the cloth started inside.
+    pub exiting_vertices: usize,
     pub energy: f64,
     pub stats: &'a LoopStats,
     pub dropped_steps: u64,
@@ -69,6 +71,14 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             DiagnosticStatus::WARN,
             format!("{} bad joint state(s) dropped", d.new_drops),
         )
+    } else if d.exiting_vertices > 0 {
+        (
+            DiagnosticStatus::WARN,
+            format!(
+                "{} cloth vertices still on their way out of an obstacle they started inside",
+                d.exiting_vertices
+            ),
+        )
     } else if d.quality.level > 0 {
         (
             DiagnosticStatus::OK,
@@ -104,6 +114,7 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             "deepest_penetration_m",
             format!("{:.6}", d.deepest_penetration),
         ),
+        kv("exiting_vertices", d.exiting_vertices.to_string()),
         kv("energy_j", format!("{:.6}", d.energy)),
         kv("divergences", s.divergences.to_string()),
         kv("steps", s.steps.to_string()),
@@ -279,6 +290,7 @@ mod tests {
             step_time_max: 0.002,
             contacts: 3,
             deepest_penetration: 0.0,
+            exiting_vertices: 0,
             energy: 0.0,
             stats: &stats,
             dropped_steps: 0,
@@ -314,6 +326,15 @@ mod tests {
             .values
             .iter()
             .any(|kv| kv.key == "real_time_factor" && kv.value == "0.500"));
+        d.real_time_factor = Some(1.0);
+        d.exiting_vertices = 40;
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s.message.contains("40 cloth vertices"), "{}", s.message);
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "exiting_vertices" && kv.value == "40"));
         d.new_divergences = 1;
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
     }

@@ -58,6 +58,8 @@ pub struct SimLoop {
     stats: LoopStats,
     window: Window,
     contacts: usize,
+    /// Vertices still on their way out of an obstacle the cloth started inside (last step).
+    exiting: usize,
     energy: f64,
     /// Adaptive quality (fixed at the scene's when `cfg.quality` is `None`).
     quality: QualityController,
@@ -113,6 +115,7 @@ impl SimLoop {
                 ..Window::default()
             },
             contacts: 0,
+            exiting: 0,
             energy: 0.0,
             quality,
             step_cost: None,
@@ -313,7 +316,7 @@ impl SimLoop {
         let start = Instant::now();
         let result = self.sim.step().map(|m| {
             (
-                m.contacts,
+                (m.contacts, m.exiting_vertices),
                 m.deepest_penetration,
                 m.kinetic_energy + m.potential_energy,
             )
@@ -328,8 +331,8 @@ impl SimLoop {
         self.window.step_time_sum += wall;
         self.window.step_time_max = self.window.step_time_max.max(wall);
         match result {
-            Ok((contacts, depth, energy)) => {
-                self.contacts = contacts;
+            Ok(((contacts, exiting), depth, energy)) => {
+                (self.contacts, self.exiting) = (contacts, exiting);
                 self.energy = energy;
                 self.window.deepest_penetration = self.window.deepest_penetration.max(depth);
                 let dt = self.sim.settings.dt;
@@ -445,6 +448,7 @@ impl SimLoop {
             step_time_max: w.step_time_max,
             contacts: self.contacts,
             deepest_penetration: w.deepest_penetration,
+            exiting_vertices: self.exiting,
             energy: self.energy,
             stats: &self.stats,
             dropped_steps: self.pacer.dropped_steps(),
