@@ -11,6 +11,11 @@ pub(crate) struct Exit {
     pub obstacle: u32,
     pub dir: Vec3,
     pub cap: f64,
+    /// Out of the solid, but a mesh edge of it still cuts through: it goes on out along `dir`.
+    pub edge_inside: bool,
+    /// Its mesh neighbours: `CollisionStage::exit_neighbours[first..first + count]`.
+    pub first: u32,
+    pub count: u32,
 }
 
 /// Whether `vertex` is on its way out of any obstacle (`exits` sorted by vertex).

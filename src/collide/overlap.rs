@@ -123,6 +123,7 @@ impl CollisionStage {
     /// nearest face each pass as before (a sheet pinned at a ball's centre).
     pub fn plan_exits(&mut self, x: &[Vec3], kinematic: &[u32]) {
         self.exits.clear();
+        self.exit_neighbours.clear();
         let n = self.n_vertices.min(x.len());
         let obstacles = &self.obstacles;
         // Per vertex, the obstacles it is inside (a bit each; rarely more than one).
@@ -199,12 +200,19 @@ impl CollisionStage {
                 // A vertex without edges (or only zero-length ones) moves a thickness a pass.
                 let edge = Some(mesh.shortest[v]).filter(|e| e.is_finite() && *e > 0.0);
                 let cap = edge.map_or(self.thickness[v], |e| EXIT_STEP * e);
+                let first = self.exit_neighbours.len() as u32;
+                self.exit_neighbours
+                    .extend(mesh.neighbours(v).map(|w| w as u32));
+                let count = self.exit_neighbours.len() as u32 - first;
                 for &oi in &inside[v] {
                     self.exits.push(Exit {
                         vertex: v as u32,
                         obstacle: oi as u32,
                         dir: obstacles[oi].pose.rotation.inverse() * dir,
                         cap,
+                        edge_inside: false,
+                        first,
+                        count,
                     });
                 }
             }
@@ -217,19 +225,39 @@ impl CollisionStage {
         self.exits.len()
     }
 
-    /// Drops the exits of vertices that are out (`x` the positions a pass ended in) and of
-    /// kinematic ones (`inv_mass` 0: pinned or held inside by the scene, not on their way out).
+    /// Drops the exits of vertices that are out with every mesh edge of theirs clear of the
+    /// solid (`x` the positions a pass ended in), and of kinematic ones (`inv_mass` 0: pinned or
+    /// held inside by the scene, not on their way out). A vertex out of the solid whose edge
+    /// still cuts through it keeps going along its way out: retired alone, the forearm's axis
+    /// pushed such an edge, 9 mm from the axis of a 40 mm cylinder, 3.9 cm in one pass.
     pub(super) fn retire_exits(&mut self, x: &[Vec3], inv_mass: &[f64]) {
         if self.exits.is_empty() {
             return;
         }
-        let obstacles = &self.obstacles;
-        self.exits.retain(|e| {
+        let (obstacles, neighbours) = (&self.obstacles, &self.exit_neighbours);
+        self.exits.retain_mut(|e| {
             let o = &obstacles[e.obstacle as usize];
             let i = e.vertex as usize;
-            inv_mass.get(i).is_some_and(|&w| w > 0.0)
-                && x.get(i)
-                    .is_some_and(|p| o.contains_local(o.pose.inverse_transform_point(*p)))
+            let (Some(&w), Some(&p)) = (inv_mass.get(i), x.get(i)) else {
+                return false;
+            };
+            if w <= 0.0 {
+                return false;
+            }
+            let local = o.pose.inverse_transform_point(p);
+            if o.contains_local(local) {
+                return true;
+            }
+            let range = e.first as usize..(e.first + e.count) as usize;
+            e.edge_inside = neighbours[range].iter().any(|&k| {
+                x.get(k as usize).is_some_and(|q| {
+                    let other = o.pose.inverse_transform_point(*q);
+                    !o.contains_local(other)
+                        && (o.cast_local(local, other).is_some()
+                            || o.cast_local(other, local).is_some())
+                })
+            });
+            e.edge_inside
         });
     }
 

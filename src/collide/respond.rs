@@ -38,9 +38,10 @@ pub(crate) struct VertexInput {
     /// Normals of the surfaces whose friction the solver applied already (zero: unused): their
     /// contacts keep the tangential velocity it left.
     pub friction_solved: [Vec3; 3],
-    /// (direction in the obstacle's frame, most it moves per pass) when the vertex started
-    /// inside this obstacle and is on its way out (`overlap.rs`).
-    pub exit: Option<(Vec3, f64)>,
+    /// (direction in the obstacle's frame, most it moves per pass, whether it is out but an
+    /// edge of it still cuts the solid) when the vertex started inside this obstacle and is on
+    /// its way out (`overlap.rs`).
+    pub exit: Option<(Vec3, f64, bool)>,
 }
 
 /// Detects and answers one vertex against one obstacle, updating `x` (end position) and `v`.
@@ -54,18 +55,13 @@ pub(crate) fn obstacle_vertex(
     let th = inp.thickness;
     let a = o.pose_prev.inverse_transform_point(inp.x0);
     let mut p = o.pose.inverse_transform_point(*x);
-    if let Some((dir, cap)) = inp.exit {
-        if let Some(depth) = o.exit_along(p, dir) {
-            return Some(lead_out(
-                o,
-                obstacle,
-                inp,
-                dir,
-                (depth + th).min(cap),
-                p,
-                x,
-                v,
-            ));
+    if let Some((dir, cap, edge_inside)) = inp.exit {
+        let step = match o.exit_along(p, dir) {
+            Some(depth) => Some((depth + th).min(cap)),
+            None => edge_inside.then_some(cap),
+        };
+        if let Some(step) = step {
+            return Some(lead_out(o, obstacle, inp, dir, step, p, x, v));
         }
     }
     // (local contact point, local normal) of the last correction.

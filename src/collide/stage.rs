@@ -49,6 +49,8 @@ pub struct CollisionStage {
     /// Vertices that started inside a solid obstacle and are not out yet, sorted by vertex
     /// (`overlap.rs`).
     pub(super) exits: Vec<Exit>,
+    /// The exits' mesh neighbours (see [`Exit::first`]).
+    pub(super) exit_neighbours: Vec<u32>,
 }
 
 impl CollisionStage {
@@ -115,6 +117,7 @@ impl CollisionStage {
             culling: true,
             near: Vec::new(),
             exits: Vec::new(),
+            exit_neighbours: Vec::new(),
         })
     }
 

@@ -145,7 +145,7 @@ impl CollisionStage {
                                 .get(i)
                                 .copied()
                                 .unwrap_or([Vec3::ZERO; 3]),
-                            exit: exit_of(exits, i, oi).map(|e| (e.dir, e.cap)),
+                            exit: exit_of(exits, i, oi).map(|e| (e.dir, e.cap, e.edge_inside)),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
