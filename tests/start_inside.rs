@@ -266,11 +266,10 @@ fn an_arm_lying_in_a_cloth_leaves_it_to_one_side() {
 
 /// Not yet within the stretch bound: the patch leaves as one and no edge passes through, but
 /// without friction an edge reaches 1.53x rest in the first frame, and with the scene's friction
-/// (0.5) one between two of the forearm's rows 3.46x for one frame as the last rows come out
-/// (t = 0.067 s), then 1.49x. Traced: the forearm's axis pushes edge (209, 210) 4.5 cm in one
-/// pass; the edge passes 2.6 mm from the axis with both ends out of the cylinder, on opposite
-/// sides. (Before a vertex's exit waited for its edges to clear the solid as well, an edge
-/// retired that way spiked to 3.49x without friction too.)
+/// (0.5) an edge at the upper arm's end of the patch 2.91x for one frame (t = 0.1 s), then 1.43x.
+/// On the way: a vertex retired alone while its edge still cut the forearm spiked to 3.49x
+/// without friction, and one retired while its neighbour was still inside to 3.46x with it
+/// (their edge ended through the axis); both now wait (`retire_exits`).
 #[test]
 #[ignore = "issue 18 follow-up: with friction an arm's patch tears for a frame as it comes out"]
 fn an_arm_lying_in_a_cloth_leaves_it_without_tearing() {
