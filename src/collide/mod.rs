@@ -7,8 +7,9 @@
 //! of one `resolve`), `vertex_pass` (vertices vs obstacles, with `respond` for one vertex),
 //! `pinch` and `wedge` (a vertex between several obstacles), `features` (obstacle edges and
 //! rods vs cloth faces and edges), `self_contact` (cloth vs cloth), `held` (the filter of a
-//! vertex held by several surfaces), `obstacle`, `motion`, `spec` (scene description),
-//! `broad` and `narrow` (geometry).
+//! vertex held by several surfaces), `overlap` and `exit` (cloth that starts inside an
+//! obstacle), `obstacle`, `motion`, `spec` (scene description), `broad`, `narrow` and `ring`
+//! (geometry and the mesh's 1-ring).
 
 mod broad;
 mod contact;
@@ -25,6 +26,7 @@ mod pinch;
 mod report;
 mod resolve;
 mod respond;
+mod ring;
 mod self_contact;
 mod settings;
 pub mod spec;

@@ -12,6 +12,7 @@
 
 use super::exit::Exit;
 use super::features::FeatureCollider;
+use super::ring::one_ring;
 use super::stage::CollisionStage;
 use crate::Vec3;
 
@@ -32,24 +33,12 @@ struct Mesh {
 impl Mesh {
     fn of(fc: &FeatureCollider, x: &[Vec3], n: usize) -> Mesh {
         let edges = fc.edges();
+        let (first, adjacent) = one_ring(edges, n);
         let mut shortest = vec![f64::INFINITY; n];
-        let mut first = vec![0u32; n + 1];
         for &[a, b] in edges.iter().filter(|e| (e[1] as usize) < n) {
             let len = (x[a as usize] - x[b as usize]).length();
             for v in [a as usize, b as usize] {
                 shortest[v] = shortest[v].min(len);
-                first[v + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            first[v + 1] += first[v];
-        }
-        let mut fill = first.clone();
-        let mut adjacent = vec![0u32; first[n] as usize];
-        for &[a, b] in edges.iter().filter(|e| (e[1] as usize) < n) {
-            for (v, w) in [(a, b), (b, a)] {
-                adjacent[fill[v as usize] as usize] = w;
-                fill[v as usize] += 1;
             }
         }
         let mut normal = vec![Vec3::ZERO; n];
@@ -172,6 +161,9 @@ impl CollisionStage {
                     }
                 }
             }
+            if patch.iter().any(|v| kinematic.contains(&(*v as u32))) {
+                continue;
+            }
             let dir = if crossings > 0 && crossing.length() >= AGREE * crossings as f64 {
                 crossing.normalize()
             } else {
@@ -193,9 +185,6 @@ impl CollisionStage {
                     m
                 }
             };
-            if patch.iter().any(|v| kinematic.contains(&(*v as u32))) {
-                continue;
-            }
             for &v in &patch {
                 // A vertex without edges (or only zero-length ones) moves a thickness a pass.
                 let edge = Some(mesh.shortest[v]).filter(|e| e.is_finite() && *e > 0.0);
@@ -220,16 +209,12 @@ impl CollisionStage {
         self.exits.sort_unstable_by_key(|e| (e.vertex, e.obstacle));
     }
 
-    /// Vertices still on their way out of an obstacle they started inside.
-    pub fn exiting(&self) -> usize {
-        self.exits.len()
-    }
-
     /// Drops the exits of vertices that are out, with their mesh neighbours out and every mesh
-    /// edge of theirs clear of the solid (`x` the positions a pass ended in), and of kinematic ones (`inv_mass` 0: pinned or
-    /// held inside by the scene, not on their way out). A vertex out of the solid whose edge
-    /// still cuts through it keeps going along its way out: retired alone, the forearm's axis
-    /// pushed such an edge, 9 mm from the axis of a 40 mm cylinder, 3.9 cm in one pass.
+    /// edge of theirs clear of the solid (`x` the positions a pass ended in), and of kinematic
+    /// ones (`inv_mass` 0: pinned or held inside by the scene, not on their way out). A vertex
+    /// out of the solid whose edge still cuts through it keeps going along its way out: retired
+    /// alone, the forearm's axis pushed such an edge, 9 mm from the axis of a 40 mm cylinder,
+    /// 3.9 cm in one pass.
     pub(super) fn retire_exits(&mut self, x: &[Vec3], inv_mass: &[f64]) {
         if self.exits.is_empty() {
             return;

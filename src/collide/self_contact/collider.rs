@@ -8,6 +8,7 @@ use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
+use crate::collide::ring::one_ring;
 use crate::Vec3;
 
 pub(crate) struct SelfCollider {
@@ -76,26 +77,11 @@ impl SelfCollider {
             .collect();
         edges.sort_unstable();
         edges.dedup();
-        let mut deg = vec![0u32; n_vertices + 1];
-        for e in &edges {
-            deg[e[0] as usize + 1] += 1;
-            deg[e[1] as usize + 1] += 1;
-        }
-        for i in 0..n_vertices {
-            deg[i + 1] += deg[i];
-        }
-        let mut fill = deg.clone();
-        let mut nbr = vec![0u32; 2 * edges.len()];
-        for e in &edges {
-            for (a, b) in [(e[0], e[1]), (e[1], e[0])] {
-                nbr[fill[a as usize] as usize] = b;
-                fill[a as usize] += 1;
-            }
-        }
+        let (nbr_start, nbr) = one_ring(&edges, n_vertices);
         Self {
             triangles: triangles.to_vec(),
             edges,
-            nbr_start: deg,
+            nbr_start,
             nbr,
             hash: SpatialHash::default(),
             bvh: None,
