@@ -264,6 +264,18 @@ fn an_arm_at_its_velocity_limits_lifts_a_hanging_towel_without_passing_through_i
     }
 }
 
+/// The same with self-collision on (the towel folds over the arm onto itself): no link passes
+/// through it either.
+#[test]
+fn with_self_collision_the_arm_still_does_not_pass_through_the_towel() {
+    let mut s = scene(2.0, 3.0, 0.004, 0.3);
+    s.collision.self_collision = true;
+    let o = run(&s);
+    eprintln!("self-collision: {o:?}");
+    assert!(o.contacts > 0, "the arm never touched the towel");
+    assert_eq!(o.crossed_frames, 0, "{:?}", o.first);
+}
+
 /// The check sees a crossing where there is one: a rod sweeping through an edge, and not one
 /// sweeping past its end or parallel to it.
 #[test]
