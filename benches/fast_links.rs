@@ -18,6 +18,20 @@ use std::time::Instant;
 
 const REPEATS: usize = 3;
 
+/// The bundled scenes and how many frames each runs.
+const SCENES: [(&str, usize); 10] = [
+    ("hanging.yaml", 60),
+    ("sphere_drape.yaml", 60),
+    ("table.yaml", 60),
+    ("chair.yaml", 60),
+    ("crumple.yaml", 30),
+    ("flag.yaml", 60),
+    ("robot_towel.yaml", 60),
+    ("robot_cape.yaml", 60),
+    ("robot_drape_arm.yaml", 60),
+    ("robot_pick_towel.yaml", 60),
+];
+
 fn bundled(name: &str) -> (Simulation, Option<RobotDriver>) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("config")
@@ -50,17 +64,27 @@ collision: {{ mode: continuous }}
 }
 
 /// Best wall time per frame (ms) over the repeats, and substeps and splits per frame.
+/// One scene's timing: ms per frame (best of the repeats), and per frame of the last repeat
+/// its substeps, splits, CG iterations and CG milliseconds.
+struct Timing {
+    ms: f64,
+    substeps: f64,
+    splits: f64,
+    cg: f64,
+    cg_ms: f64,
+}
+
 fn time(
     build: &dyn Fn() -> (Simulation, Option<RobotDriver>),
     frames: usize,
     fast: bool,
-) -> (f64, f64, f64) {
+) -> Timing {
     let mut best = f64::INFINITY;
-    let (mut substeps, mut splits) = (0u64, 0u64);
+    let (mut substeps, mut splits, mut cg, mut cg_s) = (0u64, 0u64, 0u64, 0.0);
     for _ in 0..REPEATS {
         let (mut sim, mut driver) = build();
         sim.set_fast_contact(fast);
-        (substeps, splits) = (0, 0);
+        (substeps, splits, cg, cg_s) = (0, 0, 0, 0.0);
         let start = Instant::now();
         for _ in 0..frames {
             if let Some(d) = driver.as_mut() {
@@ -70,30 +94,38 @@ fn time(
             let m = sim.step().expect("stable");
             substeps += u64::from(m.substeps);
             splits += u64::from(m.contact_splits);
+            cg += u64::from(m.cg_iterations);
+            cg_s += m.cg_time_s;
         }
         best = best.min(start.elapsed().as_secs_f64() * 1e3 / frames as f64);
     }
     let f = frames as f64;
-    (best, substeps as f64 / f, splits as f64 / f)
+    Timing {
+        ms: best,
+        substeps: substeps as f64 / f,
+        splits: splits as f64 / f,
+        cg: cg as f64 / f,
+        cg_ms: cg_s * 1e3 / f,
+    }
 }
 
 fn main() {
+    // `DRAPE_BENCH_ROD_ONLY=1`: the rod's line alone (for a profiler).
+    let scenes: &[(&str, usize)] = if std::env::var_os("DRAPE_BENCH_ROD_ONLY").is_some() {
+        &[]
+    } else {
+        &SCENES
+    };
     println!("bundled scenes, fast contact on / off:");
-    for (name, frames) in [
-        ("hanging.yaml", 60),
-        ("sphere_drape.yaml", 60),
-        ("table.yaml", 60),
-        ("chair.yaml", 60),
-        ("crumple.yaml", 30),
-        ("flag.yaml", 60),
-        ("robot_towel.yaml", 60),
-        ("robot_cape.yaml", 60),
-        ("robot_drape_arm.yaml", 60),
-        ("robot_pick_towel.yaml", 60),
-    ] {
+    for &(name, frames) in scenes {
         let build = || bundled(name);
-        let (off, _, _) = time(&build, frames, false);
-        let (on, substeps, splits) = time(&build, frames, true);
+        let off = time(&build, frames, false).ms;
+        let Timing {
+            ms: on,
+            substeps,
+            splits,
+            ..
+        } = time(&build, frames, true);
         println!(
             "  {name}: {on:.2} / {off:.2} ms per frame = {:.3}, {substeps:.2} substeps and \
              {splits:.2} splits per frame",
@@ -101,11 +133,20 @@ fn main() {
         );
     }
     let frames = 9;
-    let (rest, _, _) = time(&|| rod(0.0), frames, true);
-    let (fast, substeps, splits) = time(&|| rod(20.0), frames, true);
+    let rest = time(&|| rod(0.0), frames, true);
+    let fast = time(&|| rod(20.0), frames, true);
     println!(
-        "5 mm rod through the 40 x 40 sheet: 20 m/s {fast:.2} ms per frame, at rest {rest:.2}: \
-         ratio {:.2} (at most 10), {substeps:.2} substeps and {splits:.2} splits per frame",
-        fast / rest
+        "5 mm rod through the 40 x 40 sheet: 20 m/s {:.2} ms per frame, at rest {:.2}: \
+         ratio {:.2} (at most 10), {:.2} substeps and {:.2} splits per frame; CG iterations per \
+         frame {:.1} (at rest {:.1}), CG time {:.2} ms per frame (at rest {:.2})",
+        fast.ms,
+        rest.ms,
+        fast.ms / rest.ms,
+        fast.substeps,
+        fast.splits,
+        fast.cg,
+        rest.cg,
+        fast.cg_ms,
+        rest.cg_ms
     );
 }

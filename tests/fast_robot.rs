@@ -238,7 +238,7 @@ fn run(scene: &Scene) -> Outcome {
 /// passes through the towel, and without friction no edge exceeds issue 18's impact bound plus
 /// 10 %, `1 + 2 v / c + M g / k` (the fingertips at `v` = 2.0 rad/s x 0.75 m + 3.0 rad/s x 0.1 m,
 /// the factor 2 for the front reflected at the rail). With friction 0.3 the rising arm drags the
-/// towel up against its rail (1.32x rest: a capstan, not an impact; reported, not judged).
+/// towel up against its rail (1.26x rest: a capstan, not an impact; reported, not judged).
 ///
 /// Before the edge-edge contact normal of a vertex against a segment was its separation, this
 /// diverged at t = 0.59 s: the towel draped over the forearm's axis at one vertex, its two
