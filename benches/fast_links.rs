@@ -8,7 +8,8 @@
 //!   at most 10x.
 //!
 //! `cargo bench --bench fast_links` prints one line per scene: ms per frame (best of the
-//! repeats), the ratio and the substeps and splits per frame.
+//! repeats), the ratio and the substeps and splits per frame; for the rod also its CG
+//! iterations and CG time per frame. `DRAPE_BENCH_ROD_ONLY=1` runs the rod alone.
 
 use drape::robot::RobotDriver;
 use drape::scene::Scene;
@@ -63,7 +64,6 @@ collision: {{ mode: continuous }}
     s.build_with_robot().expect("valid scene")
 }
 
-/// Best wall time per frame (ms) over the repeats, and substeps and splits per frame.
 /// One scene's timing: ms per frame (best of the repeats), and per frame of the last repeat
 /// its substeps, splits, CG iterations and CG milliseconds.
 struct Timing {
@@ -74,6 +74,7 @@ struct Timing {
     cg_ms: f64,
 }
 
+/// Runs `frames` frames of a freshly built scene `REPEATS` times, fast contact on or off.
 fn time(
     build: &dyn Fn() -> (Simulation, Option<RobotDriver>),
     frames: usize,

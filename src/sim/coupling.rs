@@ -234,13 +234,12 @@ impl Coupling {
             // `k h^2 / m` at the contact point's mass. A moving feature's spring is stiff for
             // this substep (split where a link moves fast): it must carry the cloth with the
             // link within the substep, not within a scene substep's time.
-            let h = if c.moving { s.h } else { h };
-            let m: f64 = spring.slots().map(|(i, w)| w * mass[i]).sum();
-            let k = if c.moving {
-                MOVING_CONTACT_STIFFNESS
+            let (h, k) = if c.moving {
+                (s.h, MOVING_CONTACT_STIFFNESS)
             } else {
-                CONTACT_STIFFNESS
+                (h, CONTACT_STIFFNESS)
             };
+            let m: f64 = spring.slots().map(|(i, w)| w * mass[i]).sum();
             spring.stiffness = k * m / (h * h);
             let movable = spring.slots().any(|(i, _)| filter[i] != Filter::Fixed);
             // A contact already deep (cloth pinched below its thickness under a press that
