@@ -73,8 +73,17 @@ impl Pose {
     }
 
     /// Interpolates between two poses (linear translation, slerp rotation); `s` in [0, 1].
-    /// Used to move obstacles smoothly across the substeps between two pose updates.
+    /// Used to move obstacles smoothly across the substeps between two pose updates. The ends
+    /// are exact: a link that stopped must compare equal to its last target, or the next frame
+    /// sees it moving by round-off and treats it as a moving obstacle (fast-contact tests,
+    /// moving-contact stiffness).
     pub fn lerp(&self, other: &Pose, s: f64) -> Pose {
+        if s >= 1.0 {
+            return *other;
+        }
+        if s <= 0.0 {
+            return *self;
+        }
         Pose::new(
             self.translation.lerp(other.translation, s),
             self.rotation.slerp(other.rotation, s).normalize(),
@@ -99,6 +108,15 @@ impl Pose {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lerp_ends_exactly_on_its_poses() {
+        let a = Pose::from_xyz_rpy([0.3, -1.0, 2.0], [0.4, -0.7, 1.9]);
+        let b = Pose::from_xyz_rpy([0.1, 0.7, -0.2], [-1.1, 0.2, 0.3]);
+        assert_eq!(a.lerp(&b, 1.0), b);
+        assert_eq!(a.lerp(&b, 0.0), a);
+        assert_eq!(b.lerp(&b, 1.0), b);
+    }
 
     #[test]
     fn inverse_composes_to_identity() {

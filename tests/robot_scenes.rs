@@ -69,8 +69,10 @@ fn attached_vertices_stay_exactly_on_their_links() {
             att.len()
         );
         let links: std::collections::HashSet<_> = att.iter().map(|a| a.1).collect();
-        if name == "robot_cape.yaml" {
-            assert_eq!(links.len(), 3, "cape hangs from torso and both shoulders");
+        // The towel hangs from the moving palm, the cape from the still torso.
+        let moving = name == "robot_towel.yaml";
+        if !moving {
+            assert_eq!(links.len(), 1, "the cape hangs from the torso alone");
         }
         let mut worst: f64 = 0.0;
         let mut moved: f64 = 0.0;
@@ -90,7 +92,7 @@ fn attached_vertices_stay_exactly_on_their_links() {
             "{name}: attached vertex off its link by {worst} m"
         );
         assert!(
-            moved > 0.05,
+            !moving || moved > 0.05,
             "{name}: the attachments barely moved ({moved} m)"
         );
     }
@@ -385,4 +387,58 @@ mod bags {
             assert!((got - want).abs() < 1e-9, "t = {t}: {got} vs {want}");
         }
     }
+}
+
+/// A link that stopped is a still obstacle again: after the arm jumps and holds, each link's
+/// obstacle ends every frame exactly on its target, so the next frame sees no motion (no fast-
+/// contact test, no moving-contact springs) however fast the flung towel moves past it. The
+/// interpolated end pose used to differ from the target by round-off, and the held arm kept
+/// splitting the steps after a jump (3 splits and 3 refusals per frame at 64x64).
+#[test]
+fn a_link_that_stopped_is_still_in_the_next_frame() {
+    use drape::robot::JointSource;
+    let mut scene = load("robot_towel.yaml");
+    scene.cloths[0].grid.resolution = [16, 16];
+    scene.solver.guard.max_contact_split_levels = Some(2);
+    let (mut sim, driver) = scene.build_with_robot().unwrap();
+    let mut driver = driver.unwrap();
+    let j = driver.robot().joint_index("right_shoulder_pitch").unwrap();
+    let dt = sim.settings.dt;
+    let mut q = driver.joint_positions().clone();
+    let mut after_jump = (0u32, 0u32);
+    let mut held = Vec::new();
+    for k in 0..8 {
+        let t = sim.time();
+        let q0 = q.clone();
+        if k == 1 {
+            q.positions[j] += 0.3;
+        }
+        driver.set_source(JointSource::Stream(vec![(t, q0), (t + dt, q.clone())]), t);
+        driver.advance(&mut sim, t + dt);
+        let m = sim.step().unwrap().clone();
+        let poses: Vec<Pose> = (sim.collision().unwrap().obstacles().iter())
+            .map(|o| o.pose)
+            .collect();
+        if k == 1 {
+            held = poses;
+        } else if k > 1 {
+            assert!(poses == held, "frame {k}: a held link's obstacle drifted");
+        }
+        if k >= 2 {
+            after_jump.0 += m.contact_splits;
+            after_jump.1 += m.contact_splits_refused;
+        }
+        if k == 1 {
+            assert!(
+                m.max_speed > 1.0,
+                "the jump flings the towel ({} m/s)",
+                m.max_speed
+            );
+        }
+    }
+    assert_eq!(
+        after_jump,
+        (0, 0),
+        "splits and refusals while the arm holds still"
+    );
 }
