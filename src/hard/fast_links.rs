@@ -4,7 +4,7 @@
 //! catalogue's criteria (finite, speed, penetration, the stretch bound) hold at CI and full
 //! resolution.
 
-use super::setup::{build, fill, parse, pick, G};
+use super::setup::{build, fill, impact_stretch_bound, parse, pick};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
 
 pub(super) fn rod_through_sheet(res: Resolution) -> Result<Case, HardError> {
@@ -42,11 +42,8 @@ collision: { mode: continuous }
     criteria.energy = EnergyCheck::NotMeasured;
     // Never through the thickness layer.
     criteria.max_penetration = Some(TH);
-    // Issue 18's impact bound plus 10 %: the strain behind a front of velocity V on a sheet of
-    // wave speed c = sqrt(stretch / density) is V / c, plus the whole weight on one spring.
-    let (k, density): (f64, f64) = (1000.0, 0.2);
-    let wave = (k / density).sqrt();
-    criteria.max_stretch = Some(1.1 * (1.0 + V / wave + density * size * size * G / k));
+    // Issue 18's impact bound, with the whole weight on one spring.
+    criteria.max_stretch = Some(impact_stretch_bound(V, 1000.0, 0.2, size * size));
     Ok(Case {
         name: "fast_rod_20_m_s",
         description: format!(

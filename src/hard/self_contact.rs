@@ -3,7 +3,7 @@
 //! in a bundled robot or garment scene: a towel shaken at the joint-velocity limits, a cape under
 //! swinging arms, a sleeve sewn and worn while the arm moves, a towel picked from a table.
 
-use super::setup::{fill, pick, G};
+use super::setup::{fill, impact_stretch_bound, pick, G};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
 use crate::scene::Scene;
 use std::path::PathBuf;
@@ -128,10 +128,13 @@ pub(super) fn cape_swinging(res: Resolution) -> Result<Case, HardError> {
     let scene = bundled(name, "robot_cape.yaml", Some(pick(res, 24, 48)), None)?;
     // robot_cape.yaml: shoulders move at most 0.8 rad/s-ish over 1 s strokes; hands ~0.75 m out:
     // 1.2 m/s. The cape hangs from the torso, within 1.5 m of the root, and falls at most 0.6 m.
-    let criteria = robot_criteria(1.5, 1.2, 0.6, 0.008);
+    let mut criteria = robot_criteria(1.5, 1.2, 0.6, 0.008);
+    // Hung from the still torso alone, the cape is stretched only by the arms' sweep and its
+    // own weight (robot_cape.yaml's material).
+    criteria.max_stretch = Some(impact_stretch_bound(1.2, 1500.0, 0.2, 0.6 * 0.6));
     case(
         name,
-        "cape attached to drape_bot's torso and shoulders while both arms swing (robot_cape.yaml), \
+        "cape on drape_bot's torso while both arms swing through its sides (robot_cape.yaml), \
          self-collision on",
         &scene,
         pick(res, 2.0, 4.0),
