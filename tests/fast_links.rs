@@ -88,7 +88,7 @@ fn yaml(c: &Case) -> String {
 name: fast_link
 duration: 1.0
 effects: [gravity, stretch, shear, bending, damping]
-solver: {{ integrator: implicit, dt: 0.016666666666666666 }}
+solver: {{ integrator: implicit, dt: 0.016666666666666666, substeps: {substeps} }}
 cloths:
   - name: sheet
     grid: {{ size: [{size}, {size}], resolution: [{res}, {res}], pose: {{ xyz: [0.0, 0.0, {CENTRE_Z}], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
@@ -111,7 +111,16 @@ collision: {{ mode: continuous }}
         res = s.res,
         speed = c.speed,
         friction = s.friction,
+        substeps = substeps(),
     )
+}
+
+/// Substeps per frame: 1, or `FAST_LINK_SUBSTEPS` for [`one_case`]'s convergence runs.
+fn substeps() -> u32 {
+    std::env::var("FAST_LINK_SUBSTEPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
 }
 
 /// What a case measured over its frames.
@@ -302,7 +311,8 @@ fn pins_of(pinned: bool) -> Pins {
 
 /// One case picked by the environment (`FAST_LINK=capsule:0.005:20`, `:pinned` appended for
 /// corner pins; `FAST_LINK_ROW=1` pins the top row instead, `FAST_LINK_MU` sets the friction,
-/// `FAST_LINK_CI=1` the CI sheet, `FAST_LINK_FRAMES=1` prints every frame), printed.
+/// `FAST_LINK_CI=1` the CI sheet, `FAST_LINK_FRAMES=1` prints every frame,
+/// `FAST_LINK_SUBSTEPS` the substeps per frame), printed.
 #[test]
 #[ignore]
 fn one_case() {
