@@ -29,6 +29,8 @@ struct Sheet {
     res: usize,
     pins: Pins,
     friction: f64,
+    /// `material.strain_limit`, where set.
+    strain_limit: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,7 +102,7 @@ cloths:
       bend_weft: 1.0e-5
       thickness: 0.004
       friction: {friction}
-{pins}obstacles:
+{limit}{pins}obstacles:
   - name: link
     shape: {shape}
     pose: {{ xyz: [0.0, {START_Y}, {CENTRE_Z}], rpy: {rpy} }}
@@ -112,6 +114,9 @@ collision: {{ mode: continuous }}
         speed = c.speed,
         friction = s.friction,
         substeps = substeps(),
+        limit = s
+            .strain_limit
+            .map_or(String::new(), |l| format!("      strain_limit: {l}\n")),
     )
 }
 
@@ -297,6 +302,7 @@ fn issue_sheet(pins: Pins) -> Sheet {
         res: 40,
         pins,
         friction: 0.3,
+        strain_limit: None,
     }
 }
 
@@ -312,7 +318,7 @@ fn pins_of(pinned: bool) -> Pins {
 /// One case picked by the environment (`FAST_LINK=capsule:0.005:20`, `:pinned` appended for
 /// corner pins; `FAST_LINK_ROW=1` pins the top row instead, `FAST_LINK_MU` sets the friction,
 /// `FAST_LINK_CI=1` the CI sheet, `FAST_LINK_FRAMES=1` prints every frame,
-/// `FAST_LINK_SUBSTEPS` the substeps per frame), printed.
+/// `FAST_LINK_SUBSTEPS` the substeps per frame, `FAST_LINK_LIMIT` the strain limit), printed.
 #[test]
 #[ignore]
 fn one_case() {
@@ -336,6 +342,9 @@ fn one_case() {
     {
         sheet.friction = mu;
     }
+    sheet.strain_limit = std::env::var("FAST_LINK_LIMIT")
+        .ok()
+        .and_then(|l| l.parse().ok());
     let c = Case {
         sheet,
         link,
@@ -389,6 +398,7 @@ fn ci_sheet(pins: Pins) -> Sheet {
         res: 20,
         pins,
         friction: 0.3,
+        strain_limit: None,
     }
 }
 
@@ -489,6 +499,34 @@ fn rods_through_a_pinned_sheet_do_not_cross_it() {
             for angle in [0.0, 0.5] {
                 let c = Case {
                     sheet: ci_sheet(Pins::Corners),
+                    link,
+                    speed,
+                    angle,
+                    frames: 9,
+                };
+                accept(&c, false);
+            }
+        }
+    }
+}
+
+/// A material with `strain_limit: 0.1` (`sim/limit.rs`) against the same rods through the same
+/// corner-pinned sheet: the limit moves the cloth after the solve, and must not pull it through a
+/// rod (no crossing at any frame end, finite, no guard stop); the stretch is printed, not judged.
+/// Measured (one run): 1.29, 1.45 and 1.12 for the 3 mm capsule at 5, 20 and 40 m/s, where the
+/// springs alone reach 2.1, 5.2 and 8.6; 1.36 and 2.31 for the 5 mm cylinder at 5 and 20 m/s.
+/// The limit holds after its passes (at most 10 % over it there); the collision pass after it
+/// stretches edges again, by more than the third of a spacing fast contact bounds a link's step
+/// by (issue 18's open item).
+#[test]
+fn with_a_strain_limit_rods_through_a_pinned_sheet_do_not_cross_it() {
+    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
+        for speed in [5.0, 20.0, 40.0] {
+            for angle in [0.0, 0.5] {
+                let mut sheet = ci_sheet(Pins::Corners);
+                sheet.strain_limit = Some(0.1);
+                let c = Case {
+                    sheet,
                     link,
                     speed,
                     angle,

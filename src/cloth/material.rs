@@ -42,6 +42,11 @@ pub struct Material {
     pub thickness: f64,
     /// Coulomb friction coefficient against obstacles and itself.
     pub friction: f64,
+    /// Largest elongation of a mesh edge, as a fraction of its rest length (0.1: 10 %). Edges
+    /// the solve leaves longer are shortened after it (`sim::limit`, Provot 1995); absent, the
+    /// springs alone resist stretch and nothing is spent on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub strain_limit: Option<f64>,
 }
 
 impl Default for Material {
@@ -62,6 +67,7 @@ impl Default for Material {
             },
             thickness: 0.005,
             friction: 0.3,
+            strain_limit: None,
         }
     }
 }

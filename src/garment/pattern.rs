@@ -199,7 +199,8 @@ fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
         ("sewing.tolerance", s.tolerance, true),
         ("sewing.close_time", s.close_time, false),
     ];
-    for (key, v, strictly) in checks {
+    let limit = m.strain_limit.map(|l| ("material.strain_limit", l, true));
+    for (key, v, strictly) in checks.into_iter().chain(limit) {
         let ok = v.is_finite() && if strictly { v > 0.0 } else { v >= 0.0 };
         if !ok {
             return Err(GarmentError::Value {

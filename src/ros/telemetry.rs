@@ -45,6 +45,10 @@ pub struct FrameQuality {
     pub potential_energy: f64,
     /// Wall time of the steps (s).
     pub wall_time_s: f64,
+    /// Edges the strain limit shortened (`None`: the scene sets no limit).
+    pub strain_limited: Option<u64>,
+    /// Largest elongation beyond the strain limit left after its passes (0: it held).
+    pub strain_limit_excess: f64,
 }
 
 impl FrameQuality {
@@ -66,6 +70,10 @@ impl FrameQuality {
         self.kinetic_energy = m.kinetic_energy;
         self.potential_energy = m.potential_energy;
         self.wall_time_s += m.wall_time_s;
+        if let Some(n) = m.strain_limited {
+            *self.strain_limited.get_or_insert(0) += u64::from(n);
+        }
+        self.strain_limit_excess = self.strain_limit_excess.max(m.strain_limit_excess);
     }
 
     /// Sets the frame's state values (time, edge stretch) from the cloth at the frame.
@@ -90,6 +98,14 @@ impl FrameQuality {
                     "{} substeps answered a fast link coarser than fast contact asks \
                      (solver.guard.max_contact_split_levels)",
                     self.contact_splits_refused
+                ),
+            )
+        } else if self.strain_limit_excess > 0.0 {
+            (
+                DiagnosticStatus::WARN,
+                format!(
+                    "edges {:.2} % beyond the strain limit after its passes",
+                    self.strain_limit_excess * 1e2
                 ),
             )
         } else if self.subdivisions > 0 {
@@ -142,6 +158,14 @@ impl FrameQuality {
         ];
         if let Some(n) = self.self_intersections {
             values.push(kv("self_intersections", n.to_string()));
+        }
+        // Only where the scene limits strain: other bags keep their bytes.
+        if let Some(n) = self.strain_limited {
+            values.push(kv("strain_limited_edges", n.to_string()));
+            values.push(kv(
+                "strain_limit_excess",
+                self.strain_limit_excess.to_string(),
+            ));
         }
         // Only while there are any: bags of scenes that start clear keep their bytes.
         if self.exiting_vertices > 0 {

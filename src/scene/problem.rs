@@ -102,6 +102,8 @@ pub const MAX_STIFFNESS: f64 = 1e8;
 pub const MAX_RIGIDITY: f64 = 1e4;
 pub const MAX_DAMPING: f64 = 1e6;
 pub const MAX_FRICTION: f64 = 100.0;
+/// Largest strain limit (an edge allowed to 11 times its rest length limits nothing real).
+pub const MAX_STRAIN_LIMIT: f64 = 10.0;
 /// Wind: speed (m/s), gust frequency (Hz), air density (kg/m^3), drag coefficient.
 pub const MAX_WIND: f64 = 1e3;
 pub const MAX_FREQUENCY: f64 = 1e4;

@@ -382,6 +382,9 @@ impl Scene {
         )?;
         positive(&key("thickness"), m.thickness, 1.0, " m")?;
         non_negative(&key("friction"), m.friction, MAX_FRICTION, "")?;
+        if let Some(limit) = m.strain_limit {
+            positive(&key("strain_limit"), limit, MAX_STRAIN_LIMIT, "")?;
+        }
         Ok(())
     }
 

@@ -1,6 +1,7 @@
 //! What one frame step did: the metrics every step reports, gathered from the solver's and
 //! the collision stage's reports of each substep.
 
+use super::limit::LimitPass;
 use crate::collide::{CollisionReport, SelfContactReport};
 use crate::integrate::StepReport;
 
@@ -46,6 +47,12 @@ pub struct StepMetrics {
     pub exiting_vertices: usize,
     /// Cloth-cloth counts summed over the substeps (largest zone: the largest seen).
     pub self_contact: SelfContactReport,
+    /// Edges the strain limit shortened after the solves, summed over the substeps (`None`:
+    /// no material sets `strain_limit`).
+    pub strain_limited: Option<u32>,
+    /// Largest elongation beyond the strain limit its passes left, over the substeps, as a
+    /// fraction of the allowed length (0: the limit held; see `sim::limit`).
+    pub strain_limit_excess: f64,
 }
 
 impl StepMetrics {
@@ -57,6 +64,12 @@ impl StepMetrics {
         self.cg_time_s += stats.cg_time_s;
         self.cg_flops += stats.cg_flops;
         self.cg_bytes += stats.cg_bytes;
+    }
+
+    /// Adds one substep's strain limiting.
+    pub(super) fn add_limit(&mut self, r: &LimitPass) {
+        *self.strain_limited.get_or_insert(0) += r.shortened;
+        self.strain_limit_excess = self.strain_limit_excess.max(r.excess);
     }
 
     /// Adds one collision pass: the last substep's contacts and culling, the deepest

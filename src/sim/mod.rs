@@ -10,6 +10,7 @@ mod error;
 mod fast;
 mod frames;
 mod guard;
+mod limit;
 mod metrics;
 mod model;
 mod scan;

@@ -3,6 +3,8 @@
 //! MuJoCo keeps `mjModel` apart from `mjData`.
 
 use super::guard::GuardSettings;
+use super::limit::StrainLimit;
+use crate::cloth::Cloth;
 use crate::effects::EffectSet;
 use crate::integrate::{Capabilities, StepReport};
 use crate::Vec3;
@@ -31,14 +33,17 @@ pub(super) struct Model {
     pub caps: Capabilities,
     /// Upper bound of the cloth's highest angular frequency (rad/s), computed on first use.
     omega_bound: Option<f64>,
+    /// The materials' strain limit (`None` when no material sets one).
+    pub limit: Option<StrainLimit>,
 }
 
 impl Model {
-    pub fn new(effects: EffectSet, caps: Capabilities) -> Self {
+    pub fn new(effects: EffectSet, caps: Capabilities, cloth: &Cloth) -> Self {
         Self {
             effects,
             caps,
             omega_bound: None,
+            limit: StrainLimit::of(cloth),
         }
     }
 

@@ -51,6 +51,7 @@ impl Simulation {
         integrator.prepare(&effects, n);
         let mut coupling = Coupling::default();
         coupling.replace_cloth(n);
+        let model = Model::new(effects, integrator.capabilities(), &cloth);
         Self {
             cloth,
             frames,
@@ -61,7 +62,7 @@ impl Simulation {
             coupling,
             last: StepMetrics::default(),
             settings,
-            model: Model::new(effects, integrator.capabilities()),
+            model,
             integrator,
             work: Work::default(),
         }
@@ -103,8 +104,8 @@ impl Simulation {
         self.integrator.prepare(&effects, cloth.len());
         self.coupling.replace_cloth(cloth.len());
         self.cloth = cloth;
-        // A new model: its cached frequency bound was for the old effects and masses.
-        self.model = Model::new(effects, self.model.caps);
+        // A new model: its cached frequency bound and strain limit were for the old cloth.
+        self.model = Model::new(effects, self.model.caps, &self.cloth);
         self.guard.restart();
         Ok(())
     }

@@ -8,7 +8,8 @@
 //! 2. coupling in: the last collision pass's contacts become the solver's constraints;
 //! 3. effects give forces and the integrator advances the state (the start state is kept);
 //! 4. kinematic vertices are put exactly on their end-of-substep targets;
-//! 5. the guard checks the result (and subdivides or stops per policy);
+//! 5. the guard checks the result (and subdivides or stops per policy); then edges the solve
+//!    left beyond their material's strain limit are shortened (see [`super::limit`]);
 //! 6. obstacles move over the substep;
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
 //! 8. collisions fix the new state; metrics are recorded;
@@ -121,6 +122,7 @@ impl Simulation {
             self.roll_back(e0);
             return self.rejected(t, h, (s0, s1), depth, m, failure);
         }
+        self.limit_strain(h, m);
         let strained = self.guard_strain();
         if self.collision.is_some() {
             if strained {
@@ -460,17 +462,26 @@ impl Simulation {
             return;
         };
         let inv_mass = &mut self.work.inv_mass;
-        inv_mass.clone_from(&self.cloth.mass);
-        inv_mass.iter_mut().for_each(|m| *m = 1.0 / *m);
-        for (i, _) in &self.cloth.kinematic {
-            inv_mass[*i as usize] = 0.0;
-        }
+        inverse_masses(&self.cloth, inv_mass);
         let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
         let feedback = &self.coupling.feedback;
         let r = stage.resolve(&self.work.x_save, x, v, inv_mass, h, feedback);
         m.add_collision(&r);
         self.guard
             .collided(Energies::of(&self.cloth, &self.model.effects));
+    }
+
+    /// Stage 5, after the guard's check: edges the solve left longer than their material's
+    /// strain limit are shortened (see [`super::limit`]). Nothing when no material sets a limit.
+    fn limit_strain(&mut self, h: f64, m: &mut StepMetrics) {
+        let Some(limit) = self.model.limit.as_mut() else {
+            return;
+        };
+        let w = &mut self.work.inv_mass;
+        inverse_masses(&self.cloth, w);
+        let c = &mut self.cloth;
+        let r = limit.apply(&mut c.x, &mut c.v, w, &c.kinematic, h);
+        m.add_limit(&r);
     }
 
     /// Whether the guard's strain check applies to this cloth (one with a collision stage; see
@@ -560,5 +571,14 @@ impl Simulation {
         if let Some(stage) = self.collision.as_mut() {
             stage.restore(&self.guard.stage_save);
         }
+    }
+}
+
+/// `w` set to the cloth's inverse masses, 0 for kinematic vertices (infinite mass).
+fn inverse_masses(cloth: &crate::cloth::Cloth, w: &mut Vec<f64>) {
+    w.clone_from(&cloth.mass);
+    w.iter_mut().for_each(|m| *m = 1.0 / *m);
+    for (i, _) in &cloth.kinematic {
+        w[*i as usize] = 0.0;
     }
 }

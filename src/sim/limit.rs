@@ -1,0 +1,419 @@
+//! Strain limiting (Provot 1995): after each solve, a mesh edge longer than `1 + strain_limit`
+//! times its rest length is shortened to that length, its two ends moved along it in proportion
+//! to their inverse masses (kinematic ends stay).
+//!
+//! Why: linear springs let a point load stretch cloth without limit. A sheet pinned at two
+//! corners and dragged by a rod stretches the edges at the pins 2.1-2.2x rest at 5 m/s and
+//! 5.2-5.5x at 20 m/s, the more the smaller the substep (`tests/fast_links.rs`), and real fabric
+//! does not: it stiffens sharply past a few percent. Stiffer springs would cost conditioning;
+//! the limit costs a few passes over the edges, and only where a material names it
+//! (`material.strain_limit`).
+//!
+//! Two parts, in this order:
+//! - Tethers (long-range attachments, Kim, Tang and Komura 2012): a free vertex may be at most
+//!   `1 + strain_limit` times its rest geodesic distance from each of its [`TETHERS`] nearest
+//!   kinematic vertices (pins, attachments), and is put back on that sphere when it is not, its
+//!   velocity away from the anchor removed. A sheet hanging from two corner pins carries its
+//!   whole weight through the edges at the pins, and edge passes alone move that correction one
+//!   ring per pass (a 40-vertex chain 50 % over rest stays over after 32 passes); a tether
+//!   takes it in one step.
+//! - Edge passes: Gauss-Seidel over the edges, alternating direction, until no edge exceeds its
+//!   limit by more than [`SLACK`] of its allowed elongation or [`MAX_PASSES`] ran; what is left
+//!   is reported (`StepMetrics`). Velocities follow the moves over the substep (Provot), so the
+//!   cloth a rod drags feels the pins and slides: removing only the separating velocity left the
+//!   rod's contacts and the pins fighting every substep (2.8x rest at 20 m/s). But an edge's
+//!   ends get at most their relative speed as speed towards each other: on the short substeps
+//!   fast contact splits a frame into, a centimetre's correction over 65 us is 150 m/s, and the
+//!   corner-pinned sheet hit at 40 m/s diverged (836 m/s) with the plain update.
+//!
+//! The limit runs before the collision pass, which has the last word: its answers may stretch
+//! an edge again (each end by at most what fast-contact splitting lets a link move a vertex, a
+//! third of a spacing), and a pass after it moving the cloth unchecked let a 3 mm rod through
+//! the sheet. Measured on that sheet with tethers and the capped update: 1.29, 1.45 and 1.12 at
+//! 5, 20 and 40 m/s; without tethers 1.44, 1.51 and 2.15; with the plain update 1.29, 1.23 and a
+//! divergence.
+
+use crate::cloth::{Cloth, Kinematic};
+use crate::Vec3;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// An edge counts as within its limit when it exceeds it by at most this fraction of the
+/// allowed elongation `strain_limit * rest` (1 % of a 10 % limit is 0.1 % of the rest length).
+const SLACK: f64 = 0.01;
+
+/// Passes per substep at most. A corner pin holding a sheet that a rod drags needs the
+/// correction to cross the sheet: one pass each way does that in order, more settle the
+/// coupling between rows and columns.
+const MAX_PASSES: usize = 32;
+
+/// Tethers per free vertex: to its nearest kinematic vertices by rest geodesic distance.
+const TETHERS: usize = 4;
+
+/// The limit of one cloth's edges (built where a piece's material sets `strain_limit`).
+#[derive(Debug, Clone)]
+pub(super) struct StrainLimit {
+    /// `(i, j, longest allowed length, tolerated length)` of every limited mesh edge.
+    edges: Vec<(u32, u32, f64, f64)>,
+    /// Per vertex: its neighbours over the mesh edges with their rest lengths, and its piece's
+    /// limit (`None`: not limited), for the tethers.
+    neighbours: Vec<Vec<(u32, f64)>>,
+    limit: Vec<Option<f64>>,
+    tethers: Tethers,
+}
+
+/// The tethers for one set of kinematic vertices (rebuilt when the set changes: a grasp, a
+/// release).
+#[derive(Debug, Clone, Default)]
+struct Tethers {
+    /// The kinematic vertices they were built for, in the cloth's order.
+    anchors: Vec<u32>,
+    /// `(free vertex, anchor, longest allowed distance)`.
+    list: Vec<(u32, u32, f64)>,
+}
+
+/// What one substep's limiting did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct LimitPass {
+    /// Edges over their limit in the first pass (the ones the solve left too long).
+    pub shortened: u32,
+    /// Largest length over the allowed length left after the passes, minus one (0: met).
+    pub excess: f64,
+}
+
+impl StrainLimit {
+    /// The limit for `cloth`'s pieces that set one; `None` when none does (no cost).
+    pub fn of(cloth: &Cloth) -> Option<Self> {
+        if cloth
+            .pieces
+            .iter()
+            .all(|p| p.material.strain_limit.is_none())
+        {
+            return None;
+        }
+        let n = cloth.len();
+        let limit: Vec<Option<f64>> = (0..n)
+            .map(|i| cloth.piece_of(i).and_then(|p| p.material.strain_limit))
+            .collect();
+        let mut edges = Vec::new();
+        let mut neighbours = vec![Vec::new(); n];
+        for (i, j) in crate::cloth::topology::unique_edges(&cloth.triangles) {
+            let (a, b) = (i as usize, j as usize);
+            let (Some(ua), Some(ub)) = (cloth.uv.get(a), cloth.uv.get(b)) else {
+                continue;
+            };
+            let rest = ua.distance(*ub);
+            let Some(s) = limit[a].filter(|_| rest > 0.0 && rest.is_finite()) else {
+                continue;
+            };
+            let allowed = rest * (1.0 + s);
+            edges.push((i, j, allowed, allowed + SLACK * s * rest));
+            neighbours[a].push((j, rest));
+            neighbours[b].push((i, rest));
+        }
+        Some(Self {
+            edges,
+            neighbours,
+            limit,
+            tethers: Tethers::default(),
+        })
+    }
+
+    /// The tethers of the kinematic vertices `anchors` (kept while they stay the same).
+    fn tethers_for(&mut self, kinematic: &[(u32, Kinematic)]) -> &[(u32, u32, f64)] {
+        let same = self.tethers.anchors.len() == kinematic.len()
+            && (self.tethers.anchors.iter())
+                .zip(kinematic)
+                .all(|(a, (k, _))| a == k);
+        if !same {
+            let anchors: Vec<u32> = kinematic.iter().map(|(k, _)| *k).collect();
+            self.tethers = Tethers {
+                list: tethers(&self.neighbours, &self.limit, &anchors),
+                anchors,
+            };
+        }
+        &self.tethers.list
+    }
+
+    /// Holds `x` within the limit over the substep `h`: the tethers of the `kinematic` vertices,
+    /// then the edge passes (inverse masses `w`, 0 for kinematic vertices).
+    pub fn apply(
+        &mut self,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+        w: &[f64],
+        kinematic: &[(u32, Kinematic)],
+        h: f64,
+    ) -> LimitPass {
+        let mut out = LimitPass::default();
+        for &(i, a, allowed) in self.tethers_for(kinematic) {
+            let (i, a) = (i as usize, a as usize);
+            let d = x[i] - x[a];
+            let len = d.length();
+            if len > allowed {
+                let n = d / len;
+                x[i] = x[a] + n * allowed;
+                let away = n.dot(v[i] - v[a]);
+                if away > 0.0 {
+                    v[i] -= n * away;
+                }
+            }
+        }
+        let edges = self.edges(x, v, w, h);
+        out.shortened = edges.shortened;
+        out.excess = edges.excess;
+        out
+    }
+
+    /// The edge passes alone: edges over their limit shortened (moves in proportion to `w`), the
+    /// velocities moved by the same over the substep `h`.
+    pub fn edges(&self, x: &mut [Vec3], v: &mut [Vec3], w: &[f64], h: f64) -> LimitPass {
+        let mut out = LimitPass::default();
+        for pass in 0..MAX_PASSES {
+            let mut over = 0u32;
+            let mut fix = |&(i, j, allowed, tolerated): &(u32, u32, f64, f64)| {
+                let (i, j) = (i as usize, j as usize);
+                let d = x[j] - x[i];
+                let len = d.length();
+                if len.is_nan() || len <= tolerated {
+                    return;
+                }
+                over += 1;
+                let (wi, wj) = (w[i], w[j]);
+                let sum = wi + wj;
+                if sum <= 0.0 {
+                    return;
+                }
+                let n = d / len;
+                let dx = n * ((len - allowed) / sum);
+                x[i] += dx * wi;
+                x[j] -= dx * wj;
+                if h > 0.0 {
+                    // Provot's velocity change, at most the ends' relative speed (see above).
+                    let rate = ((len - allowed) / h).min((v[j] - v[i]).length());
+                    let dv = n * (rate / sum);
+                    v[i] += dv * wi;
+                    v[j] -= dv * wj;
+                }
+            };
+            if pass % 2 == 0 {
+                self.edges.iter().for_each(&mut fix);
+            } else {
+                self.edges.iter().rev().for_each(&mut fix);
+            }
+            if pass == 0 {
+                out.shortened = over;
+            }
+            if over == 0 {
+                return out;
+            }
+        }
+        out.excess = (self.edges.iter())
+            .map(|&(i, j, allowed, _)| x[i as usize].distance(x[j as usize]) / allowed - 1.0)
+            .fold(0.0, f64::max);
+        out
+    }
+}
+
+/// For every limited free vertex, its [`TETHERS`] nearest `anchors` by rest geodesic distance
+/// (Dijkstra over the mesh edges from each anchor) as `(vertex, anchor, allowed distance)`.
+fn tethers(
+    neighbours: &[Vec<(u32, f64)>],
+    limit: &[Option<f64>],
+    anchors: &[u32],
+) -> Vec<(u32, u32, f64)> {
+    let n = neighbours.len();
+    let mut is_anchor = vec![false; n];
+    anchors
+        .iter()
+        .filter(|&&a| (a as usize) < n)
+        .for_each(|&a| is_anchor[a as usize] = true);
+    // Per vertex: its nearest anchors so far, (distance, anchor), at most TETHERS.
+    let mut nearest: Vec<Vec<(f64, u32)>> = vec![Vec::new(); n];
+    let mut dist = vec![f64::INFINITY; n];
+    let mut done = vec![false; n];
+    for &a in anchors.iter().filter(|&&a| (a as usize) < n) {
+        dist.iter_mut().for_each(|d| *d = f64::INFINITY);
+        done.iter_mut().for_each(|d| *d = false);
+        dist[a as usize] = 0.0;
+        let mut heap = BinaryHeap::new();
+        heap.push(Reverse((Dist(0.0), a)));
+        while let Some(Reverse((Dist(d), i))) = heap.pop() {
+            let i = i as usize;
+            if done[i] {
+                continue;
+            }
+            done[i] = true;
+            if !is_anchor[i] && limit[i].is_some() {
+                let list = &mut nearest[i];
+                list.push((d, a));
+                list.sort_by(|p, q| p.0.total_cmp(&q.0));
+                list.truncate(TETHERS);
+            }
+            for &(j, l) in &neighbours[i] {
+                let e = d + l;
+                if e < dist[j as usize] {
+                    dist[j as usize] = e;
+                    heap.push(Reverse((Dist(e), j)));
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (i, list) in nearest.iter().enumerate() {
+        if let Some(s) = limit[i] {
+            out.extend(list.iter().map(|&(d, a)| (i as u32, a, d * (1.0 + s))));
+        }
+    }
+    out
+}
+
+/// A distance ordered by `total_cmp`, for the heap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Dist(f64);
+
+impl Eq for Dist {}
+
+impl PartialOrd for Dist {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Dist {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Pose;
+
+    /// A limit, positions, inverse masses and kinematic vertices.
+    type Chain = (StrainLimit, Vec<Vec3>, Vec<f64>, Vec<(u32, Kinematic)>);
+
+    /// A chain of `n` vertices along x, every edge of rest length 1 stretched to `stretch`,
+    /// limited to 10 %; vertex 0 pinned when `pinned`.
+    fn chain(n: usize, stretch: f64, pinned: bool) -> Chain {
+        let s = 0.1;
+        let mut neighbours = vec![Vec::new(); n];
+        let mut edges = Vec::new();
+        for i in 0..n as u32 - 1 {
+            edges.push((i, i + 1, 1.0 + s, 1.0 + s + SLACK * s));
+            neighbours[i as usize].push((i + 1, 1.0));
+            neighbours[i as usize + 1].push((i, 1.0));
+        }
+        let limit = StrainLimit {
+            edges,
+            neighbours,
+            limit: vec![Some(s); n],
+            tethers: Tethers::default(),
+        };
+        let x = (0..n)
+            .map(|i| Vec3::new(stretch * i as f64, 0.0, 0.0))
+            .collect();
+        let mut w = vec![1.0; n];
+        let mut kinematic = Vec::new();
+        if pinned {
+            w[0] = 0.0;
+            kinematic.push((0, Kinematic::Pinned(Vec3::ZERO)));
+        }
+        (limit, x, w, kinematic)
+    }
+
+    #[test]
+    fn a_stretched_chain_ends_within_its_limit_and_keeps_its_momentum() {
+        let (mut limit, mut x, w, k) = chain(6, 1.2, false);
+        let x0 = x.clone();
+        // Spreading apart at 1 m/s per edge.
+        let v0: Vec<Vec3> = (0..6)
+            .map(|i| Vec3::new(i as f64 - 2.5, 0.0, 0.0))
+            .collect();
+        let mut v = v0.clone();
+        let h = 0.01;
+        let r = limit.apply(&mut x, &mut v, &w, &k, h);
+        assert_eq!(r.shortened, 5);
+        assert_eq!(r.excess, 0.0);
+        for e in 0..5 {
+            let l = x[e].distance(x[e + 1]);
+            assert!(l <= 1.1 + SLACK * 0.1 + 1e-12, "edge {e}: {l}");
+        }
+        // Equal masses moved in opposite pairs: the centre of mass and the momentum stay.
+        let com: Vec3 = x.iter().copied().sum::<Vec3>() / 6.0;
+        assert!((com.x - 1.2 * 5.0 / 2.0).abs() < 1e-9, "{com}");
+        let p: Vec3 = v.iter().copied().sum();
+        assert!(p.length() < 1e-9, "{p}");
+        // The velocities moved with the positions over the substep.
+        for i in 0..6 {
+            let want = v0[i] + (x[i] - x0[i]) / h;
+            assert!((v[i] - want).length() < 1e-9, "vertex {i}");
+        }
+    }
+
+    /// The point load of a pin: a 40-vertex chain hanging from it, every edge 50 % over rest,
+    /// is within its limit after one call (the tethers), where edge passes alone leave it far
+    /// over (a correction crosses one ring per pass).
+    #[test]
+    fn a_chain_pulled_from_its_pin_is_held_by_the_tethers() {
+        let (mut limit, mut x, w, k) = chain(40, 1.5, true);
+        let x0 = x[0];
+        // Moving away from the pin at 1 m/s.
+        let mut v = vec![Vec3::X; 40];
+        v[0] = Vec3::ZERO;
+        let r = limit.apply(&mut x, &mut v, &w, &k, 0.01);
+        assert_eq!(x[0], x0, "the pin stays");
+        assert_eq!(r.excess, 0.0);
+        assert!(x[39].x <= 39.0 * 1.1 + 1e-9, "{}", x[39].x);
+        assert!(
+            v.iter().all(|v| v.x <= 1e-12),
+            "nothing leaves the pin: {v:?}"
+        );
+        // Without tethers (no anchors), 32 edge passes leave the chain over its limit.
+        let (mut free, mut x, w, _) = chain(40, 1.5, true);
+        let r = free.apply(&mut x, &mut vec![Vec3::ZERO; 40], &w, &[], 0.01);
+        assert!(r.excess > 0.05, "{}", r.excess);
+    }
+
+    #[test]
+    fn edges_within_the_limit_are_left_alone() {
+        let (mut limit, mut x, w, k) = chain(3, 1.1, true);
+        let mut v = vec![Vec3::X; 3];
+        let x0 = x.clone();
+        let r = limit.apply(&mut x, &mut v, &w, &k, 0.01);
+        assert_eq!(r, LimitPass::default());
+        assert_eq!((x, v), (x0, vec![Vec3::X; 3]));
+    }
+
+    #[test]
+    fn tethers_follow_the_rest_geodesic_to_the_nearest_anchors() {
+        // A 3x3 grid pinned at two corners: each free vertex is tethered to both, at its rest
+        // distance (the grid's diagonals give straight-line distances here).
+        let mut c = Cloth::new();
+        let panel = crate::cloth::Panel::grid("g", [2.0, 2.0], [3, 3], &Pose::IDENTITY);
+        let material = crate::cloth::Material {
+            strain_limit: Some(0.1),
+            ..Default::default()
+        };
+        c.add_panel(panel, material);
+        c.pin(0);
+        c.pin(2);
+        let mut limit = StrainLimit::of(&c).expect("a limited material");
+        let list = limit.tethers_for(&c.kinematic).to_vec();
+        assert_eq!(list.len(), 7 * 2);
+        for (i, a, allowed) in list {
+            let rest = c.uv[i as usize].distance(c.uv[a as usize]);
+            assert!(
+                allowed >= 1.1 * rest - 1e-12,
+                "{i} -> {a}: {allowed} vs {rest}"
+            );
+        }
+        c.release(2);
+        assert_eq!(
+            limit.tethers_for(&c.kinematic).len(),
+            8,
+            "rebuilt for the one pin left"
+        );
+    }
+}
