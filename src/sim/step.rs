@@ -534,11 +534,11 @@ impl Simulation {
         let solved = &self.guard.x_solved;
         // Only edges an obstacle's pass moved an end of: halving bounds how far an obstacle
         // moves per substep, not how far self-contact pushes a layer squeezed against kinematic
-        // cloth (at most its contact distance). robot_cape's former torso and shoulder attachments:
-        // self-contact pushed an edge the solve left at 1.32 to 1.35 (bound 1.34), eight levels
-        // of halving could not undo it, and the solve answered the same stretch over ever shorter
-        // substeps with speeds growing as 1 / h (0.15 to 5.4 m/s in one 0.5 ms substep, 16 m/s by
-        // t = 1.8 s; 1.6 m/s without the halving).
+        // cloth (at most its contact distance). robot_cape's former torso and shoulder
+        // attachments: self-contact pushed an edge the solve left at 1.32 to 1.35 (bound 1.34),
+        // eight levels of halving could not undo it, and the solve answered the same stretch over
+        // ever shorter substeps with speeds growing as 1 / h (0.15 to 5.4 m/s in one 0.5 ms
+        // substep, 16 m/s by t = 1.8 s; 1.6 m/s without the halving).
         let by_obstacle = |i: usize| stage.contact_kind(i, false).is_some();
         let judged = |a: usize, b: usize| by_obstacle(a) || by_obstacle(b);
         let Some(worst) = strain.grown_beyond(solved, &self.cloth.x, bound, judged) else {
