@@ -8,7 +8,8 @@
 //! (S1), CG iterations per frame (mean and max, and for S1 split into the frames before the
 //! first contact and those with contacts), force evaluations per frame and the contacts at the
 //! end. `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
-//! scenes. It uses only `Simulation`'s public metrics, so the same file runs on an older
+//! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` (not the issue's
+//! material). It uses only `Simulation`'s public metrics, so the same file runs on an older
 //! checkout for a ratio in one session.
 
 use drape::cloth::topology::{springs, SpringKind};
@@ -55,6 +56,10 @@ fn load(file: &str, res: usize) -> Simulation {
         .join(file);
     let mut s = Scene::load(&path).expect("bundled bench scene");
     s.cloths[0].grid.resolution = [res, res];
+    // Not the material: a strain limit added on request, to see what it buys.
+    s.cloths[0].material.strain_limit = std::env::var("DRAPE_BENCH_STRAIN_LIMIT")
+        .ok()
+        .and_then(|l| l.parse().ok());
     s.build().expect("valid scene")
 }
 
