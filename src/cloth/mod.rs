@@ -163,11 +163,18 @@ impl Cloth {
 
     /// Inverse masses with kinematic vertices at zero (infinite mass).
     pub fn inverse_masses(&self) -> Vec<f64> {
-        let mut inv: Vec<f64> = self.mass.iter().map(|m| 1.0 / m).collect();
-        for (i, _) in &self.kinematic {
-            inv[*i as usize] = 0.0;
-        }
+        let mut inv = Vec::new();
+        self.inverse_masses_into(&mut inv);
         inv
+    }
+
+    /// [`Cloth::inverse_masses`] into `w` (a step's reused buffer).
+    pub fn inverse_masses_into(&self, w: &mut Vec<f64>) {
+        w.clear();
+        w.extend(self.mass.iter().map(|m| 1.0 / m));
+        for (i, _) in &self.kinematic {
+            w[*i as usize] = 0.0;
+        }
     }
 
     /// Largest relative stretch `|x_i - x_j| / |uv_i - uv_j| - 1` over the triangle edges (0 at

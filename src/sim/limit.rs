@@ -148,7 +148,6 @@ impl StrainLimit {
         kinematic: &[(u32, Kinematic)],
         h: f64,
     ) -> LimitPass {
-        let mut out = LimitPass::default();
         for &(i, a, allowed) in self.tethers_for(kinematic) {
             let (i, a) = (i as usize, a as usize);
             let d = x[i] - x[a];
@@ -162,15 +161,12 @@ impl StrainLimit {
                 }
             }
         }
-        let edges = self.edges(x, v, w, h);
-        out.shortened = edges.shortened;
-        out.excess = edges.excess;
-        out
+        self.edges(x, v, w, h)
     }
 
     /// The edge passes alone: edges over their limit shortened (moves in proportion to `w`), the
     /// velocities moved by the same over the substep `h`.
-    pub fn edges(&self, x: &mut [Vec3], v: &mut [Vec3], w: &[f64], h: f64) -> LimitPass {
+    fn edges(&self, x: &mut [Vec3], v: &mut [Vec3], w: &[f64], h: f64) -> LimitPass {
         let mut out = LimitPass::default();
         for pass in 0..MAX_PASSES {
             let mut over = 0u32;

@@ -462,7 +462,7 @@ impl Simulation {
             return;
         };
         let inv_mass = &mut self.work.inv_mass;
-        inverse_masses(&self.cloth, inv_mass);
+        self.cloth.inverse_masses_into(inv_mass);
         let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
         let feedback = &self.coupling.feedback;
         let r = stage.resolve(&self.work.x_save, x, v, inv_mass, h, feedback);
@@ -478,7 +478,7 @@ impl Simulation {
             return;
         };
         let w = &mut self.work.inv_mass;
-        inverse_masses(&self.cloth, w);
+        self.cloth.inverse_masses_into(w);
         let c = &mut self.cloth;
         let r = limit.apply(&mut c.x, &mut c.v, w, &c.kinematic, h);
         m.add_limit(&r);
@@ -571,14 +571,5 @@ impl Simulation {
         if let Some(stage) = self.collision.as_mut() {
             stage.restore(&self.guard.stage_save);
         }
-    }
-}
-
-/// `w` set to the cloth's inverse masses, 0 for kinematic vertices (infinite mass).
-fn inverse_masses(cloth: &crate::cloth::Cloth, w: &mut Vec<f64>) {
-    w.clone_from(&cloth.mass);
-    w.iter_mut().for_each(|m| *m = 1.0 / *m);
-    for (i, _) in &cloth.kinematic {
-        w[*i as usize] = 0.0;
     }
 }
