@@ -12,7 +12,7 @@
 //! obstacle's motion: over a substep of `h`, the obstacle's material point at vertex `i` moves by
 //! `d_o = T(x_i) - x_i` (`T` the rigid motion from the substep's start pose to its end pose) and
 //! the vertex by about `v_i h`; when `|d_o - v_i h|` exceeds [`REACH`] times the local spacing
-//! for a vertex within reach of the obstacle, the substep is split. Cloth carried by the link
+//! for a vertex within the obstacle's reach (see [`outruns`]), the substep is split. Cloth carried by the link
 //! moves with it and asks for nothing; static obstacles are skipped, so scenes without moving
 //! obstacles do exactly what they did.
 
@@ -28,11 +28,12 @@ use crate::{Pose, Vec3};
 /// edges to 1.27, a tenth cost three times the substeps for no gain).
 pub(super) const REACH: f64 = 1.0 / 3.0;
 
-/// How far around the obstacle a vertex is within reach, in the cloth's longest spacing (plus
-/// the thickness): two rings of edges. The vertices next to the ones a link carries trail
-/// behind it until the solve takes them along; with one ring a substep long enough to carry
-/// the cloth 1.5 spacings was allowed as soon as the first row moved with the link, and the
-/// solve left the trailing edges 1.19 times their length at 5 m/s.
+/// How far around an obstacle that touches the cloth a vertex is within reach, in the cloth's
+/// longest spacing (plus the thickness): two rings of edges. The vertices next to the ones a
+/// link carries trail behind it until the solve takes them along; with one ring a substep long
+/// enough to carry the cloth 1.5 spacings was allowed as soon as the first row moved with the
+/// link, and the solve left the trailing edges 1.19 times their length at 5 m/s. Allowing the
+/// second ring twice the motion (its edges share it) broke the same bound (1.19-1.21).
 pub(super) const REACH_RINGS: f64 = 2.0;
 
 /// The start and end pose of obstacle `o` over the substep `[t, t + h]` at frame fractions
@@ -88,20 +89,45 @@ pub(super) fn top_speed(o: &Obstacle, (a, b): (Pose, Pose), h: f64) -> f64 {
     }
 }
 
+/// How far from an obstacle a cloth vertex is within its reach over one substep.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Reach {
+    /// The cloth's largest thickness (m): the layer a vertex is met at.
+    pub thickness: f64,
+    /// The cloth's largest rest spacing (m).
+    pub spacing: f64,
+}
+
+impl Reach {
+    /// The distance around an obstacle that touches the cloth within which vertices trail the
+    /// ones it carries ([`REACH_RINGS`] spacings beyond the layer).
+    fn trailing(&self) -> f64 {
+        self.thickness + REACH_RINGS * self.spacing
+    }
+}
+
 /// Whether obstacle `o`, moving from pose `a` to `b` over a substep of `h`, moves more than
-/// [`REACH`] local spacings (`spacing(i)`) relative to a cloth vertex within reach of it.
-/// `pad`: how far from the obstacle's swept box a vertex counts as within reach (m).
+/// [`REACH`] local spacings (`spacing(i)`) relative to a cloth vertex within its reach.
+///
+/// A vertex is within reach when the obstacle's motion relative to it could bring it to the
+/// vertex's layer within the substep (its start distance, less the thickness, is at most that
+/// motion) or, while the obstacle touches the cloth (a vertex within a spacing of its layer),
+/// to the vertices that trail the ones it carries ([`Reach::trailing`]). Cloth the link carries
+/// along far ahead of it (a towel's flaps swinging around a bar, 13 cm from it) is not: counted
+/// by the swept box alone, such vertices took the issue-18 rod from 7.1 to 9.0 substeps a frame
+/// (`benches/fast_links.rs`).
 pub(super) fn outruns(
     o: &Obstacle,
     (a, b): (Pose, Pose),
     cloth: &Cloth,
     h: f64,
-    pad: f64,
+    reach: Reach,
     spacing: impl Fn(usize) -> f64,
 ) -> bool {
     if a == b {
         return false;
     }
+    let pad = reach.trailing();
     let (lo, hi) = match corners(o) {
         Some(c) => {
             let mut lo = Vec3::splat(f64::INFINITY);
@@ -119,11 +145,82 @@ pub(super) fn outruns(
     };
     // The rigid motion over the substep, world to world.
     let motion = b.mul(&a.inverse());
-    cloth.x.iter().zip(&cloth.v).enumerate().any(|(i, (x, v))| {
-        if x.cmplt(lo).any() || x.cmpgt(hi).any() {
-            return false;
-        }
-        let relative = motion.transform_point(*x) - *x - *v * h;
-        relative.length() > REACH * spacing(i)
-    })
+    // The vertices in the padded swept box: (vertex, start distance to the surface, how far the
+    // obstacle moves relative to it).
+    let near: Vec<(usize, f64, f64)> = (cloth.x.iter().zip(&cloth.v).enumerate())
+        .filter(|(_, (x, _))| !(x.cmplt(lo).any() || x.cmpgt(hi).any()))
+        .map(|(i, (x, v))| {
+            let local = a.inverse_transform_point(*x);
+            let distance = o.closest_local(local, local).signed_distance;
+            let relative = motion.transform_point(*x) - *x - *v * h;
+            (i, distance, relative.length())
+        })
+        .collect();
+    let touching = (near.iter()).any(|&(_, d, _)| d <= reach.thickness + reach.spacing);
+    let within = if touching { pad } else { reach.thickness };
+    near.iter()
+        .any(|&(i, d, moved)| d - within <= moved && moved > REACH * spacing(i))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::{Material, Panel};
+
+    /// A 20 cm sheet of 9 x 9 vertices (2.5 cm spacing) in the world x-z plane at y = `y`,
+    /// moving along y at `speed`.
+    fn sheet(y: f64, speed: f64) -> Cloth {
+        let pose = Pose::new(
+            Vec3::new(0.0, y, 0.0),
+            glam::DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        );
+        let mut cloth = Cloth::new();
+        cloth.add_panel(
+            Panel::grid("s", [0.2, 0.2], [9, 9], &pose),
+            Material::default(),
+        );
+        cloth
+            .v
+            .iter_mut()
+            .for_each(|v| *v = Vec3::new(0.0, speed, 0.0));
+        cloth
+    }
+
+    /// Whether a 5 mm rod along x, moving along y from `start` by `dy` over `h`, outruns
+    /// `cloth`.
+    fn rod_outruns(cloth: &Cloth, start: Vec3, dy: f64, h: f64) -> bool {
+        let rod = Obstacle::capsule("rod", 0.0025, 0.5, Pose::IDENTITY).expect("valid capsule");
+        let along_x = glam::DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
+        let a = Pose::new(start, along_x);
+        let b = Pose::new(start + Vec3::new(0.0, dy, 0.0), along_x);
+        let reach = Reach {
+            thickness: 0.004,
+            spacing: 0.025,
+        };
+        outruns(&rod, (a, b), cloth, h, reach, |_| 0.025)
+    }
+
+    #[test]
+    fn a_link_splits_where_it_reaches_cloth_it_outruns() {
+        let at = |y: f64, z: f64| Vec3::new(0.0, y, z);
+        // Still cloth 5 cm ahead: a 1 cm move cannot reach it, a 6 cm move does.
+        let still = sheet(0.05, 0.0);
+        assert!(!rod_outruns(&still, at(0.0, 0.0), 0.01, 0.001));
+        assert!(rod_outruns(&still, at(0.0, 0.0), 0.06, 0.001));
+        // A rod between two rows of the sheet touches it: its trailing rings count, so moving
+        // half a spacing across the sheet splits.
+        assert!(rod_outruns(
+            &sheet(0.0, 0.0),
+            at(0.0, 0.0125),
+            0.0125,
+            0.001
+        ));
+        // Cloth 13 cm ahead moving nearly with the rod (a flap it swings): within the swept box,
+        // out of reach.
+        let flap = sheet(0.13, 9.0);
+        assert!(!rod_outruns(&flap, at(0.0, 0.0), 0.1, 0.01));
+        // Cloth moving with the rod is never outrun.
+        let carried = sheet(0.0, 10.0);
+        assert!(!rod_outruns(&carried, at(0.0, 0.0125), 0.1, 0.01));
+    }
 }

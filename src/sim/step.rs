@@ -83,7 +83,7 @@ impl Simulation {
     }
 
     /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence, or
-    /// split up front where an obstacle outruns the cloth near it.
+    /// split up front where an obstacle outruns cloth within its reach.
     fn substep(
         &mut self,
         t: f64,
@@ -180,7 +180,7 @@ impl Simulation {
         self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m)
     }
 
-    /// Stage 0: whether a moving obstacle outruns the cloth near it over this substep (see
+    /// Stage 0: whether a moving obstacle outruns cloth within its reach over this substep (see
     /// [`fast`]): `Err` asks for a split (within the guard's levels of halving and of fast
     /// contact), `Ok` gives the fastest obstacle point's speed (m/s) for the strain bound, and
     /// whether a split was wanted that `max_contact_split_levels` refused. Static obstacles
@@ -215,9 +215,11 @@ impl Simulation {
                 continue;
             }
             let strain = self.guard.strain_model(cloth, &self.model.effects);
-            let th = cloth.thickness.iter().copied().fold(0.0, f64::max);
-            let pad = th + fast::REACH_RINGS * strain.max_spacing();
-            if fast::outruns(o, poses, cloth, h, pad, |i| strain.spacing(i)) {
+            let reach = fast::Reach {
+                thickness: cloth.thickness.iter().copied().fold(0.0, f64::max),
+                spacing: strain.max_spacing(),
+            };
+            if fast::outruns(o, poses, cloth, h, reach, |i| strain.spacing(i)) {
                 if !may_split {
                     refused = true;
                     continue;
