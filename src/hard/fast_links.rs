@@ -36,8 +36,8 @@ collision: { mode: continuous }
     let scene = parse("fast_rod_20_m_s", &text)?;
     let sim = build("fast_rod_20_m_s", &scene)?;
     let duration = 0.15;
-    // Carried cloth moves at the rod's speed; a free edge whipping round the rod is bounded by
-    // 3 V as in the impact case. The rod moves 3 m in the run.
+    // Carried cloth moves at the rod's speed; a free edge whipping round the rod reached 37.7 m/s
+    // (1.9 V) at full resolution, so a blow-up shows above 3 V. The rod moves 3 m in the run.
     let mut criteria = Criteria::base(V * duration + size + 1.5, 3.0 * V);
     criteria.energy = EnergyCheck::NotMeasured;
     // Never through the thickness layer.

@@ -27,8 +27,10 @@ collision: { mode: continuous }
     let sim = build("impact_20_m_s", &scene)?;
     let duration = pick(res, 0.15, 0.3);
     // Cloth that rides on the ball moves at its speed; a perfectly elastic bounce off a moving
-    // wall gives 2 V. Anything a free edge gains beyond that by whipping is bounded by 3 V here.
-    let mut criteria = Criteria::base(V * duration + 0.3 + 1.0, 3.0 * V);
+    // wall gives 2 V. The sheet's corners whip beyond that as it wraps the ball: at full
+    // resolution a corner reaches 60.9, 60.9 and 60.2 m/s with 2, 8 and 32 substeps per frame
+    // (converged: the model's whip, about 3 V), so a blow-up shows above 4 V.
+    let mut criteria = Criteria::base(V * duration + 0.3 + 1.0, 4.0 * V);
     criteria.energy = EnergyCheck::NotMeasured;
     criteria.max_penetration = Some(0.005);
     Ok(Case {
