@@ -12,9 +12,9 @@
 //! obstacle's motion: over a substep of `h`, the obstacle's material point at vertex `i` moves by
 //! `d_o = T(x_i) - x_i` (`T` the rigid motion from the substep's start pose to its end pose) and
 //! the vertex by about `v_i h`; when `|d_o - v_i h|` exceeds [`REACH`] times the local spacing
-//! for a vertex within the obstacle's reach (see [`outruns`]), the substep is split. Cloth carried by the link
-//! moves with it and asks for nothing; static obstacles are skipped, so scenes without moving
-//! obstacles do exactly what they did.
+//! for a vertex within the obstacle's reach (see [`outruns`]), the substep is split. Cloth
+//! carried by the link moves with it and asks for nothing; static obstacles are skipped, so
+//! scenes without moving obstacles do exactly what they did.
 
 use crate::cloth::Cloth;
 use crate::collide::Obstacle;
