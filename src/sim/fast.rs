@@ -114,7 +114,7 @@ impl Reach {
 /// motion) or, while the obstacle touches the cloth (a vertex within a spacing of its layer),
 /// to the vertices that trail the ones it carries ([`Reach::trailing`]). Cloth the link carries
 /// along far ahead of it (a towel's flaps swinging around a bar, 13 cm from it) is not: counted
-/// by the swept box alone, such vertices took the issue-18 rod from 7.1 to 9.0 substeps a frame
+/// by the swept box alone, such vertices took the issue-18 rod from 7.3 to 9.0 substeps a frame
 /// (`benches/fast_links.rs`).
 pub(super) fn outruns(
     o: &Obstacle,
