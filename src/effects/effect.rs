@@ -43,6 +43,13 @@ pub trait Effect: Send + Sync {
     /// Adds `df/dx` and `df/dv` at `s`. Default: the force does not depend on state.
     fn add_jacobians(&self, _s: &State, _dfdx: &mut BlockCsr, _dfdv: &mut BlockCsr) {}
 
+    /// Adds to `df/dx` the transverse stiffness of the tension an impact front puts in this
+    /// effect's springs where a moving link drags the cloth: `front_strain[i]` is the front's
+    /// strain at vertex `i` (0: none). The force is unchanged; only the linearisation is taken
+    /// at the tension the substep's drag will have built, which at rest length it has not yet
+    /// (see `Springs`). Default: no such stiffness.
+    fn add_front_stiffness(&self, _s: &State, _front_strain: &[f64], _dfdx: &mut BlockCsr) {}
+
     /// True when the Jacobians do not depend on the state (quadratic energies, linear damping):
     /// the implicit solver assembles them once, and [`Effect::add_jacobians`] must then not read
     /// its state argument.

@@ -257,6 +257,13 @@ impl EffectSet {
         }
     }
 
+    /// Adds every effect's impact-front stiffness at `s` (see [`Effect::add_front_stiffness`]).
+    pub fn add_front_stiffness(&self, s: &State, front_strain: &[f64], dfdx: &mut BlockCsr) {
+        for e in self.iter() {
+            e.add_front_stiffness(s, front_strain, dfdx);
+        }
+    }
+
     pub fn energy(&self, x: &[Vec3]) -> f64 {
         self.iter().map(|e| e.energy(x)).sum()
     }

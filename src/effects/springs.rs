@@ -281,6 +281,40 @@ impl Effect for Springs {
         }
     }
 
+    /// A spring under strain `e` has transverse stiffness `k e / (1 + e)` (the `1 - l/L` term
+    /// at `L = (1 + e) l`); at rest length it has none, so a linearised step in which a link
+    /// drags a vertex sideways leaves its neighbours behind and the edges between stretch. Where
+    /// the drag's front is on its way (`front_strain`), the transverse term is raised to that of
+    /// the front's tension, as if the spring were already at it.
+    fn add_front_stiffness(&self, st: &State, front_strain: &[f64], dfdx: &mut BlockCsr) {
+        let front = |i: u32| front_strain.get(i as usize).copied().unwrap_or(0.0);
+        let slots = self
+            .slots
+            .get(dfdx, self.springs.iter().map(|s| (s.i, s.j)));
+        for ((s, &k), sl) in self.springs.iter().zip(&self.k).zip(&slots.1) {
+            let e = front(s.i).max(front(s.j));
+            if e <= 0.0 || !e.is_finite() {
+                continue;
+            }
+            let d = st.x[s.i as usize] - st.x[s.j as usize];
+            let len = d.length();
+            if len <= 0.0 {
+                continue;
+            }
+            let n = d / len;
+            let transverse = (1.0 - s.rest / len).max(0.0);
+            let extra = e / (1.0 + e) - transverse;
+            if extra <= 0.0 {
+                continue;
+            }
+            let kii = (Mat3::IDENTITY - outer(n, n)) * (-k * extra);
+            dfdx.add_at(sl[0], kii);
+            dfdx.add_at(sl[1], kii);
+            dfdx.add_at(sl[2], -kii);
+            dfdx.add_at(sl[3], -kii);
+        }
+    }
+
     fn energy(&self, x: &[Vec3]) -> f64 {
         self.springs
             .iter()

@@ -26,6 +26,11 @@ pub struct Constraints {
     /// (see [`super::Capabilities::solves_contacts`]); the others leave them to the collision
     /// stage.
     pub contacts: Vec<ContactSpring>,
+    /// Per vertex, the strain of the impact front a moving link's drag sends through the cloth
+    /// around it this substep (0 elsewhere; empty when no link drags cloth): the implicit
+    /// solve linearises the springs there at that tension (see
+    /// [`crate::effects::Effect::add_front_stiffness`]).
+    pub front_strain: Vec<f64>,
 }
 
 impl Constraints {
@@ -35,6 +40,7 @@ impl Constraints {
             target_velocity: vec![Vec3::ZERO; n],
             friction: Vec::new(),
             contacts: Vec::new(),
+            front_strain: Vec::new(),
         }
     }
 }

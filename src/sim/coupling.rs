@@ -15,6 +15,7 @@
 //!   contacts whose friction or spring the solver applied are marked so the stage does not
 //!   answer them a second time.
 
+use super::front::Front;
 use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
 use crate::effects::{EffectSet, State};
@@ -58,6 +59,8 @@ pub(super) struct Coupling {
     /// Indices into `constraints.contacts` of the springs on moving features: they do work on
     /// the cloth, which the guard allows for.
     pub moving_springs: Vec<usize>,
+    /// The mesh edges the front of a link's drag spreads over.
+    front: Front,
 }
 
 /// What the coupling reads at the start of a substep.
@@ -202,6 +205,7 @@ impl Coupling {
         caps: &Capabilities,
     ) {
         self.constraints.contacts.clear();
+        self.constraints.front_strain.clear();
         self.moving_springs.clear();
         if !caps.solves_contacts {
             return;
@@ -267,6 +271,13 @@ impl Coupling {
             self.constraints.contacts.push(spring);
         }
         self.feedback.set_sprung(sprung);
+        self.front.strain(
+            s.cloth,
+            &self.constraints.contacts,
+            &self.moving_springs,
+            s.h,
+            &mut self.constraints.front_strain,
+        );
     }
 
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass

@@ -12,12 +12,14 @@ pub struct StepMetrics {
     pub substeps: u32,
     /// Substeps that were redone as smaller steps by the divergence guard.
     pub subdivisions: u32,
-    /// Substeps split in two because an obstacle moved fast relative to the cloth near it (see
-    /// `sim::fast`): the contact is resolved in steps the collision stage can follow.
+    /// Substeps split in two because an obstacle moved fast relative to the cloth near it, or
+    /// rolled back and split because the collision response moved a vertex more than a third of
+    /// its spacing (see `sim::fast`): the contact is resolved in steps the collision stage can
+    /// follow.
     pub contact_splits: u32,
-    /// Substeps in which an obstacle still outran the cloth but the guard's
-    /// `max_contact_split_levels` allowed no further split: the contact was answered coarser
-    /// than fast contact asks (see `sim::fast`).
+    /// Substeps in which an obstacle still outran the cloth, or the response still jumped a
+    /// vertex, but the guard's `max_contact_split_levels` allowed no further split: the contact
+    /// was answered coarser than fast contact asks (see `sim::fast`).
     pub contact_splits_refused: u32,
     pub force_evaluations: u32,
     pub cg_iterations: u32,

@@ -1,14 +1,16 @@
 //! The simulation: `Simulation::step` as a table of contents of named stages (`step`), what
 //! the simulation holds and what the outside may change between steps (`simulation`), the
 //! model and the scratch buffers (`model`), moving frames (`frames`), the solver–collision
-//! coupling both ways (`coupling`), the divergence guard with its bookkeeping (`guard`, its
-//! vertex pass `scan`, its error `error`), energies (`energy`) and metrics (`metrics`).
+//! coupling both ways (`coupling`) with the impact front a link's drag sends (`front`), the
+//! divergence guard with its bookkeeping (`guard`, its vertex pass `scan`, its error `error`),
+//! energies (`energy`) and metrics (`metrics`).
 
 mod coupling;
 mod energy;
 mod error;
 mod fast;
 mod frames;
+mod front;
 mod guard;
 mod limit;
 mod metrics;

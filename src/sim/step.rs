@@ -14,7 +14,9 @@
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
 //! 8. collisions fix the new state; metrics are recorded;
 //! 9. the guard checks the state the substep ends in for edges the collision response stretched
-//!    beyond the strain bound (and rolls the whole substep back per policy).
+//!    beyond the strain bound (and rolls the whole substep back per policy), and for vertices
+//!    the obstacle response moved more than fast contact allows (then the substep is rolled back
+//!    and split as in 0; see [`super::fast`]).
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
@@ -142,6 +144,14 @@ impl Simulation {
                     return self.rejected(t, h, (s0, s1), depth, m, failure);
                 }
             }
+            if self.response_jumped() {
+                if depth < self.split_levels() {
+                    self.roll_back_collided(book);
+                    m.contact_splits += 1;
+                    return self.halves(t, h, (s0, s1), depth, m);
+                }
+                m.contact_splits_refused += 1;
+            }
         }
         m.substeps += 1;
         Ok(())
@@ -195,13 +205,9 @@ impl Simulation {
         let Some(stage) = self.collision.as_ref().filter(|_| !self.guard.fast_off) else {
             return Ok((0.0, false));
         };
-        let g = self.settings.guard;
-        let levels = g
-            .max_contact_split_levels
-            .map_or(g.max_subdivisions, |l| l.min(g.max_subdivisions));
-        let may_split = depth < levels;
+        let may_split = depth < self.split_levels();
         // At the budget's depth (not the guard's) the test still runs, to count the refusal.
-        let test = may_split || depth < g.max_subdivisions;
+        let test = may_split || depth < self.settings.guard.max_subdivisions;
         let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
         let (mut top, mut refused) = (0.0f64, false);
         for (k, o) in stage.obstacles().iter().enumerate() {
@@ -228,6 +234,36 @@ impl Simulation {
             }
         }
         Ok((top, refused))
+    }
+
+    /// How many levels of halving fast contact may split a scene substep into: the guard's, or
+    /// fewer when `max_contact_split_levels` bounds what a live node spends on it.
+    fn split_levels(&self) -> u32 {
+        let g = self.settings.guard;
+        g.max_contact_split_levels
+            .map_or(g.max_subdivisions, |l| l.min(g.max_subdivisions))
+    }
+
+    /// Stage 9, after the strain check: whether the collision pass moved a vertex it answered
+    /// for an obstacle by more than a third of its spacing from where the solve left it (see
+    /// [`fast::jumped`]); such a substep is rolled back and split like one fast contact predicts.
+    /// Only where the strain check applies (it keeps the solved positions), and not while the
+    /// cloth is still leaving an obstacle the scene started it in (the lead-out moves a vertex a
+    /// sixth of its shortest edge per pass at most; the strain check waits too).
+    fn response_jumped(&self) -> bool {
+        let (Some(stage), Some(strain)) = (self.collision.as_ref(), self.guard.strain.as_ref())
+        else {
+            return false;
+        };
+        if self.guard.inside != Some(false) {
+            return false;
+        }
+        fast::jumped(
+            &self.guard.x_solved,
+            &self.cloth.x,
+            |i| strain.spacing(i),
+            |i| stage.contact_kind(i, false).is_some(),
+        )
     }
 
     /// Whether the substep is over the integrator's stability limit (see

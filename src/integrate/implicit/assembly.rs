@@ -21,6 +21,10 @@ impl Implicit {
         a.assign(&k.dfdx);
         dfdv.assign(&k.dfdv);
         d.effects.add_varying_jacobians(s, a, dfdv);
+        if !d.constraints.front_strain.is_empty() {
+            d.effects
+                .add_front_stiffness(s, &d.constraints.front_strain, a);
+        }
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
         friction::add_to_matrix(a, &self.drags, h);
@@ -47,6 +51,10 @@ impl Implicit {
         a.assign(&k.dfdx);
         dfdv.assign(&k.dfdv);
         d.effects.add_varying_jacobians(s, a, dfdv);
+        if !d.constraints.front_strain.is_empty() {
+            d.effects
+                .add_front_stiffness(s, &d.constraints.front_strain, a);
+        }
         a.mul(s.v, &mut self.b);
         for i in 0..n {
             self.b[i] = (self.f0[i] + self.b[i] * h) * h;
