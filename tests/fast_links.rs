@@ -482,6 +482,11 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
 ///   solve and 1.29 after the pass at 0.040 s; rows 2-8, the part passing over the rod, where
 ///   the feature pass answers new rod contacts by position, a jump of up to the third of a
 ///   spacing that `sim/fast.rs` allows), while the largest after any solve was 1.29.
+///
+/// The figures above predate the front of a link's drag (`sim/front.rs`) and the split of a
+/// pass's jumps (`sim/fast.rs`, `jumped`). With both (friction 0.3): corner pins 2.08, 5.10 and
+/// 11.0 at 5, 20 and 40 m/s; the top row 1.68, 2.66 and 3.35: the front ties the cloth behind the
+/// link to it where pins hold that cloth back (the top row at 5 m/s: 1.27 without the front).
 #[test]
 #[ignore = "issue 18 follow-up: corner-pinned sheets overstretch at the pins (in the solve)"]
 fn rods_through_a_pinned_sheet_do_not_cross_it_or_overstretch() {
