@@ -16,7 +16,7 @@
 //! builds: the classical transverse impact on a string (Smith, McCrackin and Schiefer 1958,
 //! `u / c = sqrt(e (2 sqrt(e (1 + e)) - e))`) gives 5-8 times less at 5-20 m/s. Measured with
 //! that strain (and the rings its transverse wave crosses in a substep) the rod took 3.9
-//! substeps a frame (14-16x its cost at rest instead of 9.6x) and the issue sheet's 3 mm capsule
+//! substeps a frame (14-16x its cost at rest instead of 9.6-11.8x) and the issue sheet's 3 mm capsule
 //! at 5 m/s reached 1.21 times rest against 1.18 allowed. The bound over-couples where pins hold
 //! the cloth behind the link: a sheet pinned along its top row, dragged by a 3 mm capsule at
 //! 5 m/s, reached 1.68, and 1.27 without the front (its bound 1.26 is broken either way: issue
@@ -32,6 +32,8 @@ pub(super) struct Front {
     edges: Vec<(u32, u32)>,
     /// Vertex and triangle counts the edges were built for.
     built_for: (usize, usize),
+    /// The strains before the current ring (scratch).
+    last: Vec<f64>,
 }
 
 impl Front {
@@ -78,15 +80,15 @@ impl Front {
             self.built_for = (n, cloth.triangles.len());
         }
         // Rings by relaxation over the edges: a vertex takes its neighbours' largest strain.
-        let mut last = out.clone();
         for _ in 0..REACH_RINGS as usize {
+            self.last.clone_from(out);
+            let last = &self.last;
             for &(i, j) in &self.edges {
                 let (i, j) = (i as usize, j as usize);
                 let e = last[i].max(last[j]);
                 out[i] = out[i].max(e);
                 out[j] = out[j].max(e);
             }
-            last.clone_from(out);
         }
     }
 }
