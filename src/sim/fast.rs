@@ -120,7 +120,7 @@ impl Reach {
 /// to the vertices that trail the ones it carries ([`Reach::trailing`]). Cloth the link carries
 /// along far ahead of it (a towel's flaps swinging around a bar, 13 cm from it) is not: counted
 /// by the swept box alone, such vertices took the issue-18 rod from 7.3 to 9.0 substeps a frame
-/// (`benches/fast_links.rs`).
+/// (`benches/fast_links.rs`). `near` is scratch.
 pub(super) fn outruns(
     o: &Obstacle,
     (a, b): (Pose, Pose),
@@ -128,6 +128,7 @@ pub(super) fn outruns(
     h: f64,
     reach: Reach,
     spacing: impl Fn(usize) -> f64,
+    near: &mut Vec<(usize, f64, f64)>,
 ) -> bool {
     if a == b {
         return false;
@@ -152,15 +153,17 @@ pub(super) fn outruns(
     let motion = b.mul(&a.inverse());
     // The vertices in the padded swept box: (vertex, start distance to the surface, how far the
     // obstacle moves relative to it).
-    let near: Vec<(usize, f64, f64)> = (cloth.x.iter().zip(&cloth.v).enumerate())
-        .filter(|(_, (x, _))| !(x.cmplt(lo).any() || x.cmpgt(hi).any()))
-        .map(|(i, (x, v))| {
-            let local = a.inverse_transform_point(*x);
-            let distance = o.closest_local(local, local).signed_distance;
-            let relative = motion.transform_point(*x) - *x - *v * h;
-            (i, distance, relative.length())
-        })
-        .collect();
+    near.clear();
+    near.extend(
+        (cloth.x.iter().zip(&cloth.v).enumerate())
+            .filter(|(_, (x, _))| !(x.cmplt(lo).any() || x.cmpgt(hi).any()))
+            .map(|(i, (x, v))| {
+                let local = a.inverse_transform_point(*x);
+                let distance = o.closest_local(local, local).signed_distance;
+                let relative = motion.transform_point(*x) - *x - *v * h;
+                (i, distance, relative.length())
+            }),
+    );
     let touching = (near.iter()).any(|&(_, d, _)| d <= reach.thickness + reach.spacing);
     let within = if touching { pad } else { reach.thickness };
     near.iter()
@@ -218,7 +221,7 @@ mod tests {
             thickness: 0.004,
             spacing: 0.025,
         };
-        outruns(&rod, (a, b), cloth, h, reach, |_| 0.025)
+        outruns(&rod, (a, b), cloth, h, reach, |_| 0.025, &mut Vec::new())
     }
 
     #[test]

@@ -72,4 +72,6 @@ pub(super) struct Work {
     pub inv_mass: Vec<f64>,
     /// The integrator's report of the last solve (its buffers reused across steps).
     pub report: StepReport,
+    /// The vertices near a moving obstacle, for fast contact's test (see `fast::outruns`).
+    pub near: Vec<(usize, f64, f64)>,
 }

@@ -209,7 +209,9 @@ impl Simulation {
         // At the budget's depth (not the guard's) the test still runs, to count the refusal.
         let test = may_split || depth < self.settings.guard.max_subdivisions;
         let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
+        let near = &mut self.work.near;
         let (mut top, mut refused) = (0.0f64, false);
+        let mut thickness = None;
         for (k, o) in stage.obstacles().iter().enumerate() {
             let target = targets.get(k).and_then(Option::as_ref);
             let poses = fast::substep_poses(o, target, (t, h), (s0, s1));
@@ -222,10 +224,11 @@ impl Simulation {
             }
             let strain = self.guard.strain_model(cloth, &self.model.effects);
             let reach = fast::Reach {
-                thickness: cloth.thickness.iter().copied().fold(0.0, f64::max),
+                thickness: *thickness
+                    .get_or_insert_with(|| cloth.thickness.iter().copied().fold(0.0, f64::max)),
                 spacing: strain.max_spacing(),
             };
-            if fast::outruns(o, poses, cloth, h, reach, |i| strain.spacing(i)) {
+            if fast::outruns(o, poses, cloth, h, reach, |i| strain.spacing(i), near) {
                 if !may_split {
                     refused = true;
                     continue;
