@@ -20,11 +20,7 @@ impl Implicit {
         };
         a.assign(&k.dfdx);
         dfdv.assign(&k.dfdv);
-        d.effects.add_varying_jacobians(s, a, dfdv);
-        if !d.constraints.front_strain.is_empty() {
-            d.effects
-                .add_front_stiffness(s, &d.constraints.front_strain, a);
-        }
+        state_jacobians(d, s, a, dfdv);
         a.axpby(-h * h, -h, dfdv);
         a.add_diagonal(d.mass);
         friction::add_to_matrix(a, &self.drags, h);
@@ -50,11 +46,7 @@ impl Implicit {
         d.effects.forces(s, &mut self.f0);
         a.assign(&k.dfdx);
         dfdv.assign(&k.dfdv);
-        d.effects.add_varying_jacobians(s, a, dfdv);
-        if !d.constraints.front_strain.is_empty() {
-            d.effects
-                .add_front_stiffness(s, &d.constraints.front_strain, a);
-        }
+        state_jacobians(d, s, a, dfdv);
         a.mul(s.v, &mut self.b);
         for i in 0..n {
             self.b[i] = (self.f0[i] + self.b[i] * h) * h;
@@ -116,6 +108,16 @@ impl Implicit {
             c.add_point_force(g.force(u), h, &mut self.b);
             self.edge_drags.push((k, g));
         }
+    }
+}
+
+/// Adds the state-dependent Jacobians at `s` to `a` (holding `df/dx`) and `dfdv`, with the
+/// springs' stiffness at the front of a link's drag where the coupling names one.
+fn state_jacobians(d: &Dynamics, s: &State, a: &mut BlockCsr, dfdv: &mut BlockCsr) {
+    d.effects.add_varying_jacobians(s, a, dfdv);
+    if !d.constraints.front_strain.is_empty() {
+        d.effects
+            .add_front_stiffness(s, &d.constraints.front_strain, a);
     }
 }
 
