@@ -60,9 +60,9 @@ pub fn write_summary(out: &Path, r: &StudyResult) -> Result<PathBuf, StudyError>
     );
     let _ = writeln!(
         s,
-        "| scene | stiffness | integrator | measured order | theory | fitted on dt | points |"
+        "| scene | stiffness | integrator | measured order | theory | matches | fitted on dt | points |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
     for f in &fits {
         let _ = writeln!(
             s,
