@@ -91,11 +91,14 @@ const EXPECTED: &[(&str, u64)] = &[
     // stopped drifting by round-off (`Pose::lerp` ends exactly on its poses): the still robot
     // is a still obstacle again. crumple64_near and chair16_edges re-recorded when a collision
     // pass that moved a vertex more than a third of its spacing came to split the substep
-    // (`sim/fast.rs`, `jumped`): both land on an obstacle.
-    ("crumple16_self", 0xc922c93d48aa7fe3),
-    ("crumple64_near", 0x1d5556374bd292b4),
-    ("chair16_edges", 0x2b340a2c2bfcb4c5),
-    ("pick12_robot", 0xc45b3045c6acd417),
+    // (`sim/fast.rs`, `jumped`): both land on an obstacle. crumple16_self, crumple64_near,
+    // chair16_edges and pick12_robot re-recorded when the multigrid's iteration counts came to
+    // be read from a step's first solve only (`integrate/implicit/hierarchy.rs`): a step with
+    // refits builds its hierarchy at other solves.
+    ("crumple16_self", 0x3679c0aa1648e042),
+    ("crumple64_near", 0x922e6cd426200e46),
+    ("chair16_edges", 0xae9473efc12cbe78),
+    ("pick12_robot", 0xd910881704b800ec),
     ("sphere16_projection", 0xfadc50a365b3a77e),
 ];
 

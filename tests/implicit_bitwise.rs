@@ -62,8 +62,10 @@ const CASES: &[Case] = &[
 const EXPECTED: &[(&str, u64)] = &[
     ("hanging64_implicit", 0xaccbdf2aed35b5f3),
     ("hanging24_implicit_all", 0x09b74d283d9895da),
-    ("sphere24_implicit_contact", 0x3a35c0b29c00bbf4),
-    ("table24_implicit_edges", 0x235a66d5753519ac),
+    // The two contact cases re-recorded when the multigrid's iteration counts came to be read
+    // from a step's first solve only (`integrate/implicit/hierarchy.rs`); the others unchanged.
+    ("sphere24_implicit_contact", 0xae38cbeaa4c8fe9c),
+    ("table24_implicit_edges", 0x34b5d4792464804c),
 ];
 
 /// Runs a case; returns the hash of the per-step metrics (energies, speed, solver counts) and

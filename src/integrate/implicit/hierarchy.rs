@@ -13,17 +13,39 @@ pub(super) const REBUILD_EVERY: u32 = 50;
 /// (measured 20, 23, 27, 31 iterations at ages 0 to 3); such a rebuild brings the count back.
 pub(super) const REFRESH_COST: u32 = 2;
 
+/// Which build's iteration count the next step's first solve measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Pending {
+    /// Both are measured.
+    None,
+    /// A build along the kept aggregates.
+    Build,
+    /// A full build.
+    Full,
+}
+
 /// The multigrid state kept across steps.
+///
+/// Its iteration counts are those of a step's first solve only: the refits' and Newton's
+/// solves start from the step's answer or solve for a correction and take a few iterations
+/// whatever the hierarchy. Taken from any solve, the count after a full build was often a
+/// refit's (1-4 iterations), so the next step's first solve (40-50) read as drift and asked for
+/// another full build: S1 64x64 (`benches/contact.rs`) built its hierarchy afresh 71 times in
+/// 2 s, 13 times now; the 20 m/s rod of `benches/fast_links.rs` 10 times in 38 solves, 6 now
+/// (the rest come from a split substep's count, smaller for its shorter step, taken as the
+/// baseline of a full one).
 pub(super) struct Hierarchy {
     pub(super) mg: Multigrid,
-    /// Solves since the last build (full or along the kept aggregates).
-    pub(super) steps: u32,
+    /// Whose iteration count the next step's first solve sets.
+    pub(super) pending: Pending,
     /// Solves since the last full build.
     pub(super) age: u32,
-    /// Iterations of the first solve after the last build, and after the last full build.
+    /// Iterations of the first step's first solve after the last build, and after the last
+    /// full build.
     pub(super) iterations_at_build: u32,
     pub(super) iterations_at_full: u32,
-    /// Iterations beyond `iterations_at_build` summed over the solves since the last build.
+    /// Iterations beyond `iterations_at_build` summed over the steps' first solves since the
+    /// last build.
     pub(super) excess: u32,
     /// Rebuild along the kept aggregates before the next solve.
     pub(super) rebuild: bool,

@@ -1,7 +1,7 @@
 //! The step's linear solves: the modified PCG preconditioned by the multigrid hierarchy kept
 //! across steps (block Jacobi when it cannot be built or breaks down).
 
-use super::hierarchy::{Hierarchy, REBUILD_EVERY, REFRESH_COST};
+use super::hierarchy::{Hierarchy, Pending, REBUILD_EVERY, REFRESH_COST};
 use super::settings::Preconditioner;
 use super::solver::Implicit;
 use crate::integrate::cg::SolveStats;
@@ -59,14 +59,15 @@ impl Implicit {
                 None,
             );
         }
-        if let Some(h) = self.hierarchy.as_mut() {
+        if let Some(h) = self.hierarchy.as_mut().filter(|_| history) {
             let its = stats.iterations;
-            if h.steps == 0 {
+            if h.pending != Pending::None {
                 h.iterations_at_build = its;
                 h.excess = 0;
-                if h.age == 0 {
+                if h.pending == Pending::Full {
                     h.iterations_at_full = its;
                 }
+                h.pending = Pending::None;
             } else if its > h.iterations_at_full + h.iterations_at_full / 4 + 2 {
                 h.age = REBUILD_EVERY; // drifted despite the cheap rebuilds: full rebuild next
             } else {
@@ -109,7 +110,9 @@ impl Implicit {
                 match done {
                     Ok(()) => {
                         h.age += 1;
-                        h.steps = if rebuild { 0 } else { h.steps + 1 };
+                        if rebuild && h.pending == Pending::None {
+                            h.pending = Pending::Build;
+                        }
                         h.rebuild = false;
                         if rebuild {
                             h.filter.clear();
@@ -129,7 +132,7 @@ impl Implicit {
             Ok(mg) => {
                 self.hierarchy = Some(Hierarchy {
                     mg,
-                    steps: 0,
+                    pending: Pending::Full,
                     age: 0,
                     iterations_at_build: 0,
                     iterations_at_full: 0,
