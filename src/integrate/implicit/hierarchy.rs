@@ -16,7 +16,7 @@ pub(super) const REFRESH_COST: u32 = 2;
 /// Which build's iteration count the next step's first solve measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Pending {
-    /// Both are measured.
+    /// Both counts are measured.
     None,
     /// A build along the kept aggregates.
     Build,
@@ -40,8 +40,8 @@ pub(super) struct Hierarchy {
     pub(super) pending: Pending,
     /// Solves since the last full build.
     pub(super) age: u32,
-    /// Iterations of the first step's first solve after the last build, and after the last
-    /// full build.
+    /// Iterations of the first solve of the first step after the last build, and after the
+    /// last full build.
     pub(super) iterations_at_build: u32,
     pub(super) iterations_at_full: u32,
     /// Iterations beyond `iterations_at_build` summed over the steps' first solves since the
