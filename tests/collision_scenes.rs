@@ -107,38 +107,80 @@ fn crumpling_cloth_never_ends_a_step_self_intersecting() {
     assert!(zmax < 0.3, "heap top at {zmax}");
 }
 
-/// The back's front face is 70 degrees steep (`tan 70 = 2.7 > mu = 0.2`): friction cannot hold
-/// cloth on it, so the cloth dropped over the chair slides down it, and after 8 s none of it
-/// touches the back or lies above the seat by more than its overhang could hold up (the back's
-/// top is at 1.08 m; the seat's top at 0.48 m).
-///
-/// Where it then comes to rest is not pinned down by the math: over the seat's front edge the
-/// overhang pulls against roughly as much friction on the seat top and the side edges (the
-/// 0.2 m it starts with hanging over: 0.31 N, ~0.23 N past the edge's capstan factor
-/// `exp(-mu pi / 2)`, against ~0.24 N), so whether it slides on to the ground depends on how it
-/// landed. Measured: it reached the ground at 4.5 s while a collision pass could jump a vertex by
-/// any fraction of its spacing; since such passes split the substep (`sim/fast.rs`, `jumped`;
-/// 14 splits while it lands, the largest edge 1.373 -> 1.317 times rest) it lands with less
-/// overhang in front (142 vertices below the seat there at 2 s against 252) and rests on the seat
-/// with 17 cm hanging over (at 16 s its fastest vertex moves at 1.7 mm/s). Both are equilibria.
+/// The chair's back (`config/chair.yaml`): its front face is 70 degrees steep, facing
+/// `(cos 20, 0, sin 20)`.
+const BACK: &str = "{ name: back, shape: { type: box, half_extents: [0.03, 0.25, 0.3] }, pose: { xyz: [-0.28, 0.0, 0.8], rpy: [0.0, -0.35, 0.0] } }";
+
+/// A 0.2 m patch laid on the chair's back alone (nothing under it but the ground, 0.5 m below the
+/// back's lower edge): `tan 70 = 2.7 > mu = 0.2`, so friction cannot hold it. It slides at
+/// Coulomb's `g (sin 70 - mu cos 70)` = 8.55 m/s^2 (backward Euler's velocity is exact under a
+/// constant force, and the drag slides from the first substep: measured 1.2814 m/s at 0.15 s
+/// against 1.2814; 1 % allows the solve's tolerance), off the back's lower edge, and ends on the
+/// ground with nothing on the back.
 #[test]
-fn cloth_slides_off_the_sloped_chair_back() {
-    let mut sim = load("chair.yaml").build().unwrap();
-    for _ in 0..480 {
+fn a_patch_on_the_chair_back_alone_slides_down_it_at_coulomb_acceleration_and_off_it() {
+    let (th, mu, g) = (0.008, 0.2, 9.81);
+    let tilt = 0.35_f64;
+    let n = Vec3::new(tilt.cos(), 0.0, tilt.sin());
+    let down = Vec3::new(tilt.sin(), 0.0, -tilt.cos());
+    // Centred 0.1 m up the face from its middle, one thickness (plus 0.1 mm) off it.
+    let c = Vec3::new(-0.28, 0.0, 0.8) + n * (0.03 + th + 1e-4) - down * 0.1;
+    let yaml = format!(
+        "name: patch_on_back
+duration: 3.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.016666666666666666 }}
+cloths:
+  - name: patch
+    grid: {{ size: [0.2, 0.2], resolution: [9, 9], pose: {{ xyz: [{}, {}, {}], rpy: [0.0, {}, 0.0] }} }}
+    material:
+      density: 0.2
+      stretch: 1500.0
+      shear: 150.0
+      bend_warp: 1.0e-4
+      bend_weft: 1.0e-4
+      damping: {{ spring: 0.05, air: 0.0 }}
+      thickness: {th}
+      friction: {mu}
+obstacles:
+  - {BACK}
+  - {{ name: ground, shape: {{ type: plane, normal: [0.0, 0.0, 1.0] }} }}
+collision: {{ mode: continuous }}
+",
+        c.x,
+        c.y,
+        c.z,
+        std::f64::consts::FRAC_PI_2 - tilt
+    );
+    let mut sim = Scene::from_yaml(&yaml, "patch_on_back")
+        .unwrap_or_else(|e| panic!("{e}"))
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"));
+    let a = g
+        * ((std::f64::consts::FRAC_PI_2 - tilt).sin()
+            - mu * (std::f64::consts::FRAC_PI_2 - tilt).cos());
+    // 0.15 s in it has slid 0.5 a t^2 = 9.6 cm of the 20 cm to the edge.
+    for _ in 0..9 {
         sim.step().unwrap();
     }
-    let stage = sim.collision().expect("the chair collides");
-    let back = stage
-        .obstacles()
-        .iter()
-        .position(|o| o.name == "back")
-        .expect("the chair has a back");
-    let on_back = stage
+    let t = sim.time();
+    let v = sim.cloth.v.iter().map(|v| v.dot(down)).sum::<f64>() / sim.cloth.len() as f64;
+    assert!(
+        (v - a * t).abs() <= 0.01 * a * t,
+        "at {t:.3} s the patch slides at {v:.3} m/s, Coulomb {:.3}",
+        a * t
+    );
+    for _ in 9..180 {
+        sim.step().unwrap();
+    }
+    let on_back = sim
+        .collision()
+        .expect("it collides")
         .contacts()
         .iter()
-        .filter(|c| c.obstacle == back)
+        .filter(|c| c.obstacle == 0)
         .count();
-    assert_eq!(on_back, 0, "{on_back} vertices rest on the 70 degree back");
+    assert_eq!(on_back, 0, "{on_back} vertices still on the back");
     let zmax = sim
         .cloth
         .x
@@ -146,7 +188,59 @@ fn cloth_slides_off_the_sloped_chair_back() {
         .map(|x| x.z)
         .fold(f64::NEG_INFINITY, f64::max);
     assert!(
-        zmax < 0.6,
+        zmax < 0.1,
+        "the patch's highest vertex is at {zmax} m, not on the ground"
+    );
+}
+
+/// The whole chair scene: the cloth dropped over the chair (from 1.25 m, over the back's top at
+/// 1.08 m) comes down off the back; nothing stays where only friction on the 70 degree face
+/// could hold it (the patch above shows it cannot).
+///
+/// Where it then rests is not pinned down by the math, and the test does not pick one outcome:
+/// - the heap on the seat can prop cloth up against the lower back: the springs resist
+///   compression, so a fold leaning on the back is an equilibrium of this model (measured: ~27
+///   vertices up to 0.66 m, with the CG tolerance at 2e-5 instead of the scene's 1e-5, or with
+///   split substeps keeping the last full substep's aggregates);
+/// - over the seat's front edge the overhang pulls against roughly as much friction on the seat
+///   top and the side edges (the 0.2 m it starts with hanging over: 0.31 N, ~0.23 N past the
+///   edge's capstan factor `exp(-mu pi / 2)`, against ~0.24 N), so whether it slides on to the
+///   ground depends on how it landed (measured both: on the ground at 4.5 s, and resting on the
+///   seat with 17 cm hanging over).
+///
+/// What holds in every outcome: after 8 s nothing rests on the back's upper half (its face spans
+/// 0.52-1.08 m), where nothing from the seat props it and only friction could hold it, and
+/// nothing of the cloth is that high.
+#[test]
+fn cloth_dropped_on_the_chair_comes_down_off_its_back() {
+    let mut sim = load("chair.yaml").build().unwrap();
+    for _ in 0..480 {
+        sim.step().unwrap();
+    }
+    let reach = 0.8;
+    let stage = sim.collision().expect("the chair collides");
+    let back = stage
+        .obstacles()
+        .iter()
+        .position(|o| o.name == "back")
+        .expect("the chair has a back");
+    let on_back_high = stage
+        .contacts()
+        .iter()
+        .filter(|c| c.obstacle == back && sim.cloth.x[c.vertex as usize].z > reach)
+        .count();
+    assert_eq!(
+        on_back_high, 0,
+        "{on_back_high} vertices rest on the 70 degree back above {reach} m"
+    );
+    let zmax = sim
+        .cloth
+        .x
+        .iter()
+        .map(|x| x.z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        zmax < reach,
         "the cloth's highest vertex is still at {zmax} m"
     );
 }

@@ -50,6 +50,9 @@ pub struct Dynamics<'a> {
     pub effects: &'a EffectSet,
     pub mass: &'a [f64],
     pub constraints: &'a Constraints,
+    /// The scene's substep (s); a step shorter than it is a split or a subdivision of one (0:
+    /// unknown, every step counts as a full one). See `integrate::implicit::solve`.
+    pub nominal_step: f64,
 }
 
 impl Dynamics<'_> {

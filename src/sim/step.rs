@@ -383,6 +383,7 @@ impl Simulation {
             effects: &self.model.effects,
             mass: &self.cloth.mass,
             constraints: &self.coupling.constraints,
+            nominal_step: self.settings.substep(),
         };
         let w = &mut self.work;
         let start = (w.x_save.as_slice(), w.v_save.as_slice());

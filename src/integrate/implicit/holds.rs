@@ -90,6 +90,7 @@ mod tests {
                 effects: &effects,
                 mass: &mass,
                 constraints: &constraints,
+                nominal_step: 0.0,
             };
             let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
             let mut v = [Vec3::ZERO; 2];

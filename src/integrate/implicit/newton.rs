@@ -144,6 +144,7 @@ mod tests {
             effects: &effects,
             mass: &mass,
             constraints: &constraints,
+            nominal_step: 0.0,
         };
         let mut x = [Vec3::ZERO, Vec3::new(l, 0.0, 0.0)];
         let mut v = [Vec3::ZERO, Vec3::new(0.0, speed, 0.0)];

@@ -13,14 +13,27 @@ impl Implicit {
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
     /// `history`: `dv` holds the last step's velocity change and `older` the one before, both
     /// start directions (else `dv` alone).
+    ///
+    /// A split or subdivided step (`short_step`) keeps the last full step's aggregates (see
+    /// [`Self::update_hierarchy`]) and stays out of the rebuild schedule. Aggregated afresh,
+    /// a short step's mass-dominated matrix coarsened poorly (the 20 m/s rod's split substeps:
+    /// levels of 1600, 310, 221 rows, the 221-row level ~77 blocks a row against the finest's
+    /// ~9, 7-15 ms a build against 1.3-1.6 ms at a full substep), and its smaller iteration
+    /// count, taken as the schedule's baseline, made the next full step's read as drift. The
+    /// rod (`cargo bench --bench fast_links`): 20.5-21.0 -> 15.2-15.7 ms per frame, 10.5-11.0
+    /// -> 8.2 times its cost at rest. Block Jacobi for short steps took it to 15-16
+    /// ms but S1 64x64, whose splits land the cloth on the ball, from 108 to 247 CG iterations
+    /// per frame (171 for quarter steps and shorter); the last full step's coarse levels as
+    /// they were, 81 ms.
     pub(super) fn solve(&mut self, filt: &[Filter], history: bool) -> SolveStats {
         let (tol, max_it) = (self.settings.cg_tolerance, self.settings.cg_max_iterations);
-        if history {
+        let short = self.short_step;
+        if history && !short {
             if let Some(h) = self.hierarchy.as_mut() {
                 h.rebuild |= h.filter_changed(filt);
             }
         }
-        let use_mg = self.update_hierarchy(filt).is_some();
+        let use_mg = self.update_hierarchy(filt, short, history).is_some();
         let Some(a) = self.a.as_ref() else {
             unreachable!("prepared above");
         };
@@ -59,7 +72,7 @@ impl Implicit {
                 None,
             );
         }
-        if let Some(h) = self.hierarchy.as_mut().filter(|_| history) {
+        if let Some(h) = self.hierarchy.as_mut().filter(|_| history && !short) {
             let its = stats.iterations;
             if h.pending != Pending::None {
                 h.iterations_at_build = its;
@@ -84,7 +97,16 @@ impl Implicit {
     /// Gives the multigrid the current filtered matrix: a fresh hierarchy when none exists or the
     /// last one has aged (iterations drifting up or `REBUILD_EVERY` steps), else only the finest
     /// level. `None` means block Jacobi (multigrid disabled or its setup failed).
-    pub(super) fn update_hierarchy(&mut self, filt: &[Filter]) -> Option<&mut Multigrid> {
+    ///
+    /// A short step (`short`: split or subdivided) gets coarse values along the last full step's
+    /// aggregates at its first solve (`history`), the finest level alone at its re-solves, and
+    /// leaves the schedule as it was, with a rebuild due at the next full step.
+    pub(super) fn update_hierarchy(
+        &mut self,
+        filt: &[Filter],
+        short: bool,
+        history: bool,
+    ) -> Option<&mut Multigrid> {
         if self.preconditioner != Preconditioner::Multigrid {
             return None;
         }
@@ -101,13 +123,14 @@ impl Implicit {
             .is_some_and(|h| h.mg.rows() == n && h.age < REBUILD_EVERY);
         if reuse {
             if let Some(h) = self.hierarchy.as_mut() {
-                let rebuild = h.rebuild;
+                let rebuild = if short { history } else { h.rebuild };
                 let done = if rebuild {
                     h.mg.rebuild(fine)
                 } else {
                     h.mg.refresh_finest(fine)
                 };
                 match done {
+                    Ok(()) if short => h.rebuild = true,
                     Ok(()) => {
                         h.age += 1;
                         if rebuild && h.pending == Pending::None {
@@ -118,7 +141,6 @@ impl Implicit {
                             h.filter.clear();
                             h.filter.extend_from_slice(filt);
                         }
-                        return self.hierarchy.as_mut().map(|h| &mut h.mg);
                     }
                     Err(e) => {
                         log::debug!("multigrid refresh failed ({e}); rebuilding");
@@ -126,6 +148,7 @@ impl Implicit {
                         return None;
                     }
                 }
+                return self.hierarchy.as_mut().map(|h| &mut h.mg);
             }
         }
         match Multigrid::build(fine) {

@@ -20,6 +20,8 @@ pub(super) struct Constant {
 }
 
 pub struct Implicit {
+    /// Whether the current step is a split or subdivided one (see `solve.rs`).
+    pub(super) short_step: bool,
     pub(super) settings: ImplicitSettings,
     pub(super) preconditioner: Preconditioner,
     /// df/dx, then reused in place as the system matrix A.
@@ -72,6 +74,7 @@ impl Implicit {
 
     pub fn with_preconditioner(settings: ImplicitSettings, preconditioner: Preconditioner) -> Self {
         Self {
+            short_step: false,
             settings,
             preconditioner,
             a: None,

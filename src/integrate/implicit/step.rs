@@ -14,6 +14,10 @@ use crate::Vec3;
 /// Solves at most with friction drags refitted to the sliding speed (see [`crate::integrate::friction`]).
 const MAX_REFITS: u32 = 2;
 
+/// A step shorter than this share of the scene's substep is a split or subdivided one (halves,
+/// quarters, ...; see `Implicit::solve`).
+const SHORT_STEP: f64 = 0.75;
+
 /// Newton iterations at most beyond Baraff and Witkin's one linearised solve.
 const MAX_NEWTON: u32 = 8;
 
@@ -28,6 +32,7 @@ impl Implicit {
         report: &mut StepReport,
     ) {
         let n = x.len();
+        self.short_step = h < SHORT_STEP * d.nominal_step;
         if self.a.as_ref().is_none_or(|a| a.rows() != n) {
             self.prepare(d.effects, n);
         }
