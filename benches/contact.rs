@@ -8,8 +8,8 @@
 //! (S1), CG iterations per frame (mean and max, and for S1 split into the frames before the
 //! first contact and those with contacts), force evaluations per frame and the contacts at the
 //! end. `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
-//! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` (not the issue's
-//! material). It uses only `Simulation`'s public metrics, so the same file runs on an older
+//! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
+//! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the material). It uses only `Simulation`'s public metrics, so the same file runs on an older
 //! checkout for a ratio in one session.
 
 use drape::cloth::topology::{springs, SpringKind};
@@ -60,6 +60,12 @@ fn load(file: &str, res: usize) -> Simulation {
     s.cloths[0].material.strain_limit = std::env::var("DRAPE_BENCH_STRAIN_LIMIT")
         .ok()
         .and_then(|l| l.parse().ok());
+    if let Some(mu) = std::env::var("DRAPE_BENCH_FRICTION")
+        .ok()
+        .and_then(|m| m.parse().ok())
+    {
+        s.cloths[0].material.friction = mu;
+    }
     s.build().expect("valid scene")
 }
 

@@ -7,17 +7,36 @@ use glam::Mat3A as M3;
 /// Strength threshold on `|A_ij|_F^2 >= theta^2 |A_ii|_F |A_jj|_F`.
 const THETA: f32 = 0.08;
 
+/// A row in no aggregate: no strong connection at all (see [`aggregate`]).
+pub(super) const ISOLATED: u32 = u32::MAX;
+
 /// Aggregates of the strong-connection graph (Vanek, Mandel, Brezina 1996): seeds whose strong
 /// neighbourhood is untouched become aggregates, leftovers join a neighbouring aggregate, the rest
 /// form their own. Returns the aggregate of each row and the aggregate count.
+///
+/// A row with no strong connection ([`ISOLATED`]: its diagonal dominates, e.g. a vertex held by
+/// a sticking friction drag, `mu N / STICK_SPEED` per m/s) is in no aggregate: the smoother
+/// solves it, and the coarse levels leave it out. As singleton aggregates such rows stalled the
+/// coarsening (S1 64x64 with friction 5: 4096 -> ~1050 -> ~440 rows, the last ~200 blocks a row
+/// after smoothing the prolongator, 80-100 ms a frame at rest).
 pub(super) fn aggregate(a: &Csr, diag: &[M3]) -> (Vec<u32>, usize) {
     let n = a.rows();
     let dnorm: Vec<f32> = diag.iter().map(|d| frob2(d).sqrt()).collect();
     let strong =
         |i: usize, j: usize, m: &M3| i != j && frob2(m) >= THETA * THETA * dnorm[i] * dnorm[j];
-    const NONE: u32 = u32::MAX;
+    const NONE: u32 = u32::MAX - 1;
     let mut agg = vec![NONE; n];
     let mut count = 0u32;
+    for (i, ai) in agg.iter_mut().enumerate() {
+        let (cols, vals) = a.row(i);
+        if !cols
+            .iter()
+            .zip(vals)
+            .any(|(&j, m)| strong(i, j as usize, m))
+        {
+            *ai = ISOLATED;
+        }
+    }
     // Phase 1: untouched neighbourhoods.
     for i in 0..n {
         if agg[i] != NONE {
@@ -55,7 +74,8 @@ pub(super) fn aggregate(a: &Csr, diag: &[M3]) -> (Vec<u32>, usize) {
         }
         *ai = best.1;
     }
-    // Phase 3: whatever is left (isolated or weakly connected rows) forms its own aggregates.
+    // Phase 3: whatever is left (rows whose strong neighbours were all taken) forms its own
+    // aggregates.
     for i in 0..n {
         if agg[i] != NONE {
             continue;

@@ -2,6 +2,7 @@
 //! identity per vertex into its aggregate: the translations) smoothed once by damped block
 //! Jacobi, with `omega = 4 / (3 rho(D^-1 A))`.
 
+use super::aggregate::ISOLATED;
 use super::csr::{Csr, Spill};
 use glam::{Mat3A as M3, Vec3A as V3};
 
@@ -41,7 +42,8 @@ pub(super) fn spectral_radius(a: &Csr, dinv: &[M3]) -> f32 {
     rho * 1.05
 }
 
-/// `P = (I - omega D^-1 A) P_tent`, `P_tent` = one identity block per row in its aggregate column.
+/// `P = (I - omega D^-1 A) P_tent`, `P_tent` = one identity block per row in its aggregate column
+/// (none for an [`ISOLATED`] row).
 pub(super) fn smoothed_prolongator(
     a: &Csr,
     dinv: &[M3],
@@ -65,6 +67,9 @@ pub(super) fn smoothed_prolongator(
         let (cols, vals) = a.row(i);
         for (&j, &m) in cols.iter().zip(vals) {
             let c = agg[j as usize];
+            if c == ISOLATED {
+                continue;
+            }
             let slot = marker[c as usize];
             if slot != usize::MAX && slot >= begin {
                 p.vals[slot] += m;
@@ -78,13 +83,15 @@ pub(super) fn smoothed_prolongator(
         for v in &mut p.vals[begin..] {
             *v = w * *v;
         }
-        let own = agg[i] as usize;
-        let slot = marker[own];
-        if slot != usize::MAX && slot >= begin {
-            p.vals[slot] += M3::IDENTITY;
-        } else {
-            p.cols.push(own as u32);
-            p.vals.push(M3::IDENTITY);
+        let own = agg[i];
+        if own != ISOLATED {
+            let slot = marker[own as usize];
+            if slot != usize::MAX && slot >= begin {
+                p.vals[slot] += M3::IDENTITY;
+            } else {
+                p.cols.push(own);
+                p.vals.push(M3::IDENTITY);
+            }
         }
         p.row_start.push(p.cols.len());
     }
