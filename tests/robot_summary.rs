@@ -108,7 +108,20 @@ fn drape_check_shows_the_bundled_robot_and_the_cloth_inside_its_base() {
         text.contains("joint right_finger_b_joint (prismatic)") && text.contains("mimics"),
         "{text}"
     );
-    // The cape's hem starts inside the base box (the start-inside report).
+    // The bundled cape's hem rests exactly on the base box's top: on it, not inside.
+    assert!(text.contains("no cloth vertex starts inside one"), "{text}");
+    // Lowered 2 cm, its hem starts inside the base box (the start-inside report).
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = std::fs::read_to_string(root.join("config/robot_cape.yaml"))
+        .expect("bundled scene")
+        .replace("xyz: [-0.2, 0.0, 0.4]", "xyz: [-0.2, 0.0, 0.38]")
+        .replace(
+            "../urdf/drape_bot.urdf",
+            &root.join("urdf/drape_bot.urdf").display().to_string(),
+        );
+    let lowered = dir.path().join("cape_lowered.yaml");
+    std::fs::write(&lowered, scene).expect("scene written");
+    let text = check(&lowered);
     assert!(
         text.contains("cloth vertices start inside obstacle 'base_link/0'"),
         "{text}"
