@@ -3,6 +3,7 @@
 
 use drape::collide::DetectionMode;
 use drape::scene::Scene;
+use drape::sim::Simulation;
 use drape::Vec3;
 use std::path::Path;
 
@@ -13,6 +14,23 @@ fn load(name: &str) -> Scene {
             .join(name),
     )
     .unwrap()
+}
+
+/// The highest and the lowest cloth vertex (z, m).
+fn highest(sim: &Simulation) -> f64 {
+    sim.cloth
+        .x
+        .iter()
+        .map(|x| x.z)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+fn lowest(sim: &Simulation) -> f64 {
+    sim.cloth
+        .x
+        .iter()
+        .map(|x| x.z)
+        .fold(f64::INFINITY, f64::min)
 }
 
 #[test]
@@ -76,12 +94,7 @@ fn tablecloth_rests_on_the_round_table() {
             "{mode:?}: middle at z = {}",
             mid.z
         );
-        let lowest = sim
-            .cloth
-            .x
-            .iter()
-            .map(|x| x.z)
-            .fold(f64::INFINITY, f64::min);
+        let lowest = lowest(&sim);
         assert!(
             lowest < 0.6,
             "{mode:?}: the rim should drape down (lowest z {lowest})"
@@ -98,12 +111,7 @@ fn crumpling_cloth_never_ends_a_step_self_intersecting() {
         assert_eq!(m.self_intersections, Some(0), "step {k}");
     }
     // It did crumple: the cloth lies low, in a heap smaller than its flat size.
-    let zmax = sim
-        .cloth
-        .x
-        .iter()
-        .map(|x| x.z)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let zmax = highest(&sim);
     assert!(zmax < 0.3, "heap top at {zmax}");
 }
 
@@ -181,12 +189,7 @@ collision: {{ mode: continuous }}
         .filter(|c| c.obstacle == 0)
         .count();
     assert_eq!(on_back, 0, "{on_back} vertices still on the back");
-    let zmax = sim
-        .cloth
-        .x
-        .iter()
-        .map(|x| x.z)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let zmax = highest(&sim);
     assert!(
         zmax < 0.1,
         "the patch's highest vertex is at {zmax} m, not on the ground"
@@ -233,12 +236,7 @@ fn cloth_dropped_on_the_chair_comes_down_off_its_back() {
         on_back_high, 0,
         "{on_back_high} vertices rest on the 70 degree back above {reach} m"
     );
-    let zmax = sim
-        .cloth
-        .x
-        .iter()
-        .map(|x| x.z)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let zmax = highest(&sim);
     assert!(
         zmax < reach,
         "the cloth's highest vertex is still at {zmax} m"

@@ -86,11 +86,6 @@ fn depth_inside(o: &Obstacle, p: Vec3) -> Option<f64> {
     (depth > ON_SURFACE).then_some(depth)
 }
 
-/// Whether a vertex at local point `p` starts inside solid `o` (see [`depth_inside`]).
-fn starts_inside(o: &Obstacle, p: Vec3) -> bool {
-    depth_inside(o, p).is_some()
-}
-
 /// The share of a vertex's shortest mesh edge one pass may move it out: the strain one
 /// correction hands the next solve (as fast contact lets an obstacle move a third of a spacing
 /// per substep, and self-contact pushes a pair at most a third of an edge).
@@ -139,7 +134,7 @@ impl CollisionStage {
         // Per vertex, the obstacles it is inside (rarely more than one).
         let inside_of = |p: Vec3| {
             (obstacles.iter().enumerate())
-                .filter(move |(_, o)| starts_inside(o, o.pose.inverse_transform_point(p)))
+                .filter(move |(_, o)| depth_inside(o, o.pose.inverse_transform_point(p)).is_some())
                 .map(|(k, _)| k)
         };
         let inside: Vec<Vec<usize>> = x[..n].iter().map(|&p| inside_of(p).collect()).collect();

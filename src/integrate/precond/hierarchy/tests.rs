@@ -4,8 +4,27 @@
 use super::*;
 use crate::integrate::cg::Pcg;
 use crate::integrate::test_systems::*;
-use crate::linalg::{Filter, PatternBuilder};
+use crate::linalg::{BlockCsr, Filter, PatternBuilder};
 use crate::{Mat3, Vec3};
+
+/// `a` with every block `(i, j)` replaced by `f(i, j, block)`, same pattern.
+fn mapped(a: &BlockCsr, f: impl Fn(usize, u32, Mat3) -> Mat3) -> BlockCsr {
+    let n = a.rows();
+    let mut p = PatternBuilder::new();
+    for i in 0..n {
+        for &j in a.row(i).0 {
+            p.couple(i as u32, j);
+        }
+    }
+    let mut out = p.build(n);
+    for i in 0..n {
+        let (cols, vals) = a.row(i);
+        for (&j, m) in cols.iter().zip(vals) {
+            out.add(i as u32, j, f(i, j, *m));
+        }
+    }
+    out
+}
 
 /// A rebuild along the kept aggregates reproduces a full build of the same matrix exactly
 /// (same aggregates and damping, so the same numbers); rebuilt for a rotated cloth
@@ -30,19 +49,7 @@ fn rebuild_along_kept_aggregates_follows_a_rotation() {
     assert_eq!(zf, zk);
     // Rotate every block by 60 degrees about x: the springs point elsewhere.
     let r = Mat3::from_rotation_x(std::f64::consts::FRAC_PI_3);
-    let mut p = PatternBuilder::new();
-    for i in 0..n {
-        for &j in a.row(i).0 {
-            p.couple(i as u32, j);
-        }
-    }
-    let mut rotated = p.build(n);
-    for i in 0..n {
-        let (cols, vals) = a.row(i);
-        for (&j, m) in cols.iter().zip(vals) {
-            rotated.add(i as u32, j, r * *m * r.transpose());
-        }
-    }
+    let rotated = mapped(&a, |_, _, m| r * m * r.transpose());
     let mut fine = Csr::default();
     fine.filtered(&rotated, &filt);
     let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
@@ -75,27 +82,16 @@ fn rebuild_along_kept_aggregates_follows_a_rotation() {
 fn rows_without_strong_connections_stay_out_of_the_coarse_levels() {
     let a = cloth_system(32);
     let n = a.rows();
-    let mut p = PatternBuilder::new();
-    for i in 0..n {
-        for &j in a.row(i).0 {
-            p.couple(i as u32, j);
-        }
-    }
     // The first half of the rows held by a drag 1e4 times their diagonal.
-    let mut stuck = p.build(n);
-    for i in 0..n {
-        let (cols, vals) = a.row(i);
-        for (&j, m) in cols.iter().zip(vals) {
-            let drag = if j as usize == i && i < n / 2 {
-                *m * 1e4
-            } else {
-                Mat3::ZERO
-            };
-            stuck.add(i as u32, j, *m + drag);
+    let stuck = mapped(&a, |i, j, m| {
+        if j as usize == i && i < n / 2 {
+            m + m * 1e4
+        } else {
+            m
         }
-    }
+    });
     let filt = vec![Filter::Free; n];
-    let build = |m: &crate::linalg::BlockCsr| {
+    let build = |m: &BlockCsr| {
         let mut fine = Csr::default();
         fine.filtered(m, &filt);
         Multigrid::build(fine).expect("hierarchy")
@@ -111,7 +107,7 @@ fn rows_without_strong_connections_stay_out_of_the_coarse_levels() {
     let mut rng = Rng(5);
     let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
     let z = vec![Vec3::ZERO; n];
-    let iterations = |m: &crate::linalg::BlockCsr, mg: &mut Multigrid| {
+    let iterations = |m: &BlockCsr, mg: &mut Multigrid| {
         let mut dv = vec![Vec3::ZERO; n];
         Pcg::default()
             .solve(m, &filt, &b, &z, Some(mg), 1e-8, 1000, &mut dv, None)
