@@ -269,3 +269,60 @@ fn intersection_count_detects_crossing_sheets() {
     // The step started intersecting, so nothing can be resolved by motion: x1 stays at x0.
     assert_eq!(x1, x);
 }
+
+/// A vertex is answered only within its contact distance of the triangle itself, not of the
+/// triangle's plane. Here it is 5.34 mm above the plane of a right triangle with 6.3 mm legs
+/// (contact distance 6 mm) and 2.88 mm beyond its hypotenuse, 6.07 mm from the triangle, where
+/// its projection lies within the tolerance of Bridson et al. (`gap / max_edge`, 0.67 of a
+/// barycentric coordinate; the vertex's is -0.65) and its box within the broad phase's margin
+/// of the triangle's. It must stay where it is; 1.5 mm beyond the hypotenuse (5.55 mm from the
+/// triangle) it is pushed off.
+#[test]
+fn a_vertex_beyond_its_contact_distance_of_the_triangle_is_not_pushed() {
+    let l = 0.0063;
+    // Triangle A and triangle B whose first vertex p is the probe, its others far from A. The
+    // rest shape is taken from the first state seen, so the two start apart (not near at rest)
+    // and are then placed with no motion in the step (no CCD), 10 cm above the ground plane
+    // `Run` puts under every test.
+    let z = Vec3::new(0.0, 0.0, 0.1);
+    let a = [z, z + Vec3::new(l, 0.0, 0.0), z + Vec3::new(0.0, l, 0.0)];
+    let b = |p: Vec3| {
+        [
+            p,
+            p + Vec3::new(0.03, 0.0, 0.01),
+            p + Vec3::new(0.0, 0.03, 0.02),
+        ]
+    };
+    let pushed = |beyond: f64| {
+        let far = b(Vec3::new(-0.5, 0.0, 0.5));
+        let x: Vec<Vec3> = a.iter().chain(far.iter()).copied().collect();
+        let mut run = Run::with_settings(
+            x,
+            vec![[0, 1, 2], [3, 4, 5]],
+            CollisionSettings {
+                mode: DetectionMode::Continuous,
+                self_collision: true,
+                ..CollisionSettings::default()
+            },
+        );
+        let mut v = vec![Vec3::ZERO; 6];
+        let x0 = run.x.clone();
+        let mut x1 = x0.clone();
+        let fb = SolverFeedback::default();
+        run.stage.resolve(&x0, &mut x1, &mut v, &run.w, H, &fb);
+        let off = l / 2.0 + beyond / 2f64.sqrt();
+        let p = z + Vec3::new(off, off, 0.00534);
+        let placed: Vec<Vec3> = a.iter().chain(b(p).iter()).copied().collect();
+        let mut x1 = placed.clone();
+        let rep = run.stage.resolve(&placed, &mut x1, &mut v, &run.w, H, &fb);
+        (x1[3] - p, rep.self_contact.repulsions)
+    };
+    let (dx, repulsions) = pushed(0.00288);
+    assert_eq!(
+        (dx, repulsions),
+        (Vec3::ZERO, 0),
+        "6.07 mm from the triangle"
+    );
+    let (dx, repulsions) = pushed(0.0015);
+    assert!(repulsions > 0 && dx.length() > 1e-4, "{dx} {repulsions}");
+}

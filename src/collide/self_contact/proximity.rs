@@ -339,10 +339,17 @@ impl SelfCollider {
             }
             st
         };
+        let gap = st.gap(th);
+        // Within the contact distance of the plane but not of the triangle: the tolerance above
+        // assumes a thickness small against the triangle, and at 128x128 crumple (6 mm on a
+        // 6.3 mm spacing, `tol` 1.35) it answered 6.8 k such pairs a step, pushing layers
+        // apart beyond their contact distance.
+        if (p - q).length_squared() >= gap * gap {
+            return None;
+        }
         let n = if nf.dot(st.eval(x0)) >= 0.0 { nf } else { -nf };
         let dist = n.dot(st.eval(x));
         // Behind the face it started in front of: a crossing, CCD's (with the crossing's normal).
-        let gap = st.gap(th);
         (dist >= 0.0 && dist < gap).then_some((st, n, gap))
     }
 
