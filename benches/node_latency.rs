@@ -6,6 +6,9 @@
 //! channels (the node's pipeline without middleware), with the age of the state the detecting
 //! message carries (arrival minus its stamp, the clock time its step was due): latency minus age
 //! is how long after the message that step was due (negative while the simulation lags).
+//! Each step of the arm is a 0.3 rad jump of the shoulder, which the node reaches at the joint's
+//! velocity limit (`joint_velocity_limits`); one self-collision row has the limits off, each
+//! jump reached in one step.
 //!
 //! Runs DDS, so it re-executes itself inside a private network namespace (root, iproute2):
 //! `cargo bench --bench node_latency`. Prints a table.
@@ -92,6 +95,8 @@ enum Solver {
     Adaptive,
     /// Adaptive, with the scene's self-collision on (issue 16's acceptance row).
     AdaptiveSelf,
+    /// The same with `joint_velocity_limits: false`: each jump reached in one step.
+    AdaptiveSelfUnlimited,
 }
 
 /// How the bench talks to the simulation: through DDS (the real node), or straight to the
@@ -214,6 +219,7 @@ fn dds_link(scene: &Scene, solver: Solver, dir: &std::path::Path) -> Link {
         publish_rate: RATE,
         obstacles_rate: 0.0,
         adaptive_quality: solver != Solver::Scene,
+        joint_velocity_limits: solver != Solver::AdaptiveSelfUnlimited,
         ..NodeParams::default()
     };
     let stop = Arc::new(AtomicBool::new(false));
@@ -271,6 +277,7 @@ fn direct_link(scene: Scene, solver: Solver) -> Link {
         publish_rate: RATE,
         obstacles_rate: 0.0,
         quality: (solver != Solver::Scene).then(QualityBounds::default),
+        joint_velocity_limits: solver != Solver::AdaptiveSelfUnlimited,
         ..LoopConfig::default()
     };
     let core = SimLoop::new(scene, cfg, wall.now()).unwrap();
@@ -296,7 +303,8 @@ fn unix_now() -> f64 {
 
 fn measure(res: usize, solver: Solver, dds: bool) -> Row {
     let mut scene = scene_for(res);
-    scene.collision.self_collision = solver == Solver::AdaptiveSelf;
+    scene.collision.self_collision =
+        matches!(solver, Solver::AdaptiveSelf | Solver::AdaptiveSelfUnlimited);
     let attached: Vec<usize> = scene
         .build()
         .unwrap()
@@ -389,6 +397,7 @@ impl std::fmt::Display for Solver {
             Solver::Scene => "scene",
             Solver::Adaptive => "adaptive",
             Solver::AdaptiveSelf => "adaptive, self-collision",
+            Solver::AdaptiveSelfUnlimited => "adaptive, self-collision, no velocity limits",
         })
     }
 }
@@ -408,6 +417,7 @@ fn main() {
             (64, Solver::Scene, true),
             (64, Solver::Adaptive, true),
             (64, Solver::AdaptiveSelf, true),
+            (64, Solver::AdaptiveSelfUnlimited, true),
         ]);
     }
     plan.extend([(24, Solver::Scene, false), (64, Solver::Adaptive, false)]);

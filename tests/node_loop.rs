@@ -424,3 +424,88 @@ fn a_step_reaching_a_new_command_publishes_a_step_early() {
     // Instants T0, T0 + 1/30, ..., T0 + 1: 31 frames, one of them early.
     assert_eq!(frame_count(&out), 31);
 }
+
+/// A joint state the robot cannot reach within a step is reached at its joint's URDF velocity
+/// limit: drape_bot's shoulder (2 rad/s) commanded 0.3 rad away moves 2 rad/s x dt each step
+/// and arrives after 0.15 s, not at the end of the next step (as it does with the limits off).
+#[test]
+fn a_joint_state_jump_is_reached_at_the_joint_velocity_limit() {
+    for limits in [true, false] {
+        let cfg = LoopConfig {
+            joint_velocity_limits: limits,
+            ..LoopConfig::default()
+        };
+        let mut l = SimLoop::new(towel(6), cfg, T0).expect("loop");
+        let dt = l.simulation().settings.dt;
+        let mut out = Vec::new();
+        l.sync_clock(T0);
+        l.advance_to(T0, &mut out);
+        let d = l.driver().expect("robot");
+        let j = d.robot().joint_index("right_shoulder_pitch").unwrap();
+        let v = d.robot().kinematics().joints()[j].velocity_limit.unwrap();
+        assert_eq!(v, 2.0);
+        let s0 = d.joint_positions().positions[j];
+        l.handle(shoulder(s0 + 0.3), T0, &mut out);
+        for k in 1..=12 {
+            l.advance_to(T0 + k as f64 * dt, &mut out);
+            let s = l.driver().unwrap().joint_positions().positions[j];
+            let want = if limits {
+                s0 + (v * k as f64 * dt).min(0.3)
+            } else {
+                s0 + 0.3
+            };
+            assert!(
+                (s - want).abs() < 1e-9,
+                "limits {limits}, step {k}: {s} against {want}"
+            );
+        }
+    }
+}
+
+/// A tangle is not silent: two sheets built crossing each other (a state the fail-safe cannot
+/// undo: the step starts intersecting) show in `/diagnostics` as WARN with the exact count of
+/// intersecting triangle pairs and the pairs the fail-safe gave up on.
+#[test]
+fn a_tangled_cloth_is_reported_in_diagnostics() {
+    let sheet = |name: &str, xyz: &str, rpy: &str| {
+        format!(
+            "  - name: {name}
+    grid: {{ size: [0.3, 0.3], resolution: [8, 8], pose: {{ xyz: {xyz}, rpy: {rpy} }} }}
+    pins: [ {{ region: top_left }}, {{ region: top_right }}, {{ region: bottom_left }}, {{ region: bottom_right }} ]
+    material: {{ density: 0.2, stretch: 500.0, shear: 50.0, thickness: 0.004 }}
+"
+        )
+    };
+    let text = format!(
+        "name: crossed
+duration: 1.0
+effects: [gravity, stretch, shear]
+solver: {{ integrator: implicit, dt: 0.016666666666666666 }}
+cloths:
+{}{}collision: {{ mode: continuous, self_collision: true, count_self_intersections: true }}
+",
+        sheet("flat", "[0.0, 0.0, 0.5]", "[0.0, 0.0, 0.0]"),
+        sheet(
+            "upright",
+            "[0.0, 0.0, 0.5]",
+            "[1.5707963267948966, 0.0, 0.0]"
+        ),
+    );
+    let scene = Scene::from_yaml(&text, "crossed.yaml").expect("scene");
+    let mut l = SimLoop::new(scene, LoopConfig::default(), T0).expect("loop");
+    let mut out = Vec::new();
+    l.sync_clock(T0);
+    run(&mut l, T0, T0 + 1.5, 0.01, &mut out);
+    let d = diagnostics(&out);
+    let last = d.last().expect("diagnostics");
+    let s = &last.status[0];
+    assert_eq!(
+        s.level,
+        drape::ros::msg::DiagnosticStatus::WARN,
+        "{}",
+        s.message
+    );
+    assert!(s.message.contains("cloth tangled"), "{}", s.message);
+    let n: usize = value(last, "self_intersections").parse().expect("counted");
+    assert!(n > 0);
+}

@@ -312,3 +312,25 @@ fn mimic_errors_and_zero_axis() {
     let e = tree_err(&xml("", "", "0 0 0"));
     assert!(matches!(e, TreeError::BadAxis { joint, .. } if joint == "ja"));
 }
+
+/// The slew time is the slowest commanded joint's distance over its velocity limit, on the
+/// positions FK uses: a command past a limit counts only to the limit, mimic joints follow
+/// their source, and a joint without a velocity limit (continuous `jc`) takes no time.
+#[test]
+fn slew_time_is_the_slowest_joint_at_its_velocity_limit() {
+    let robot = gripper(r#"<mimic joint="ja" multiplier="-2" offset="0.1"/>"#, "");
+    let kin = robot.kinematics();
+    let from = robot.zero_positions();
+    let mut to = robot.zero_positions();
+    to.positions[0] = 0.03;
+    assert!(
+        (kin.slew_time(&from, &to) - 0.03).abs() < TOL,
+        "ja at 1 m/s"
+    );
+    to.positions[0] = 0.5; // past the 0.04 upper limit: moves 0.04
+    assert!((kin.slew_time(&from, &to) - 0.04).abs() < TOL);
+    to.positions[1] = 99.0; // jb is a mimic: ignored
+    to.positions[2] = 10.0; // jc has no velocity limit
+    assert!((kin.slew_time(&from, &to) - 0.04).abs() < TOL);
+    assert_eq!(kin.slew_time(&from, &from), 0.0);
+}

@@ -374,6 +374,19 @@ impl Kinematics {
         JointPositions::zeros(self.joints.len())
     }
 
+    /// The shortest time in which every commanded joint with a velocity limit gets from `from`
+    /// to `to` (positions as FK uses them, clamped to their limits) at or below that limit; 0
+    /// when none has one or none moves. Free and mimic joints follow what is commanded.
+    pub fn slew_time(&self, from: &JointPositions, to: &JointPositions) -> f64 {
+        self.actuated_joints()
+            .filter_map(|(ji, j)| {
+                let v = j.velocity_limit?;
+                let d = self.effective_position(to, ji).0 - self.effective_position(from, ji).0;
+                Some(d.abs() / v)
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// Names of the joints a user commands: scalar, not mimic (in joint index order).
     pub fn actuated_joints(&self) -> impl Iterator<Item = (usize, &Joint)> {
         self.joints

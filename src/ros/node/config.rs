@@ -17,6 +17,9 @@ pub struct LoopConfig {
     pub obstacles_rate: f64,
     pub diagnostics_rate: f64,
     pub max_backlog_steps: u32,
+    /// Joint states are reached no faster than the URDF's velocity limits allow
+    /// ([`super::JointGate::velocity_limits`]).
+    pub joint_velocity_limits: bool,
     pub paused: bool,
     pub color: [f32; 4],
     /// Adaptive quality within these bounds (see [`super::quality`]); `None`: the scene's
@@ -35,6 +38,7 @@ impl Default for LoopConfig {
             obstacles_rate: 2.0,
             diagnostics_rate: 1.0,
             max_backlog_steps: 6,
+            joint_velocity_limits: true,
             paused: false,
             color: [0.85, 0.35, 0.2, 1.0],
             quality: None,

@@ -209,6 +209,7 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         obstacles_rate: params.obstacles_rate,
         diagnostics_rate: params.diagnostics_rate,
         max_backlog_steps: params.max_backlog_steps,
+        joint_velocity_limits: params.joint_velocity_limits,
         paused: params.paused,
         color: params.color,
         quality: params.adaptive_quality.then_some(params.quality),

@@ -23,6 +23,10 @@ pub struct DiagnosticsInput<'a> {
     pub deepest_penetration: f64,
     /// Cloth vertices still on their way out of an obstacle the cloth started inside.
     pub exiting_vertices: usize,
+    /// Cloth-cloth pairs the collision fail-safe could not resolve, summed over the window.
+    pub unresolved_contacts: usize,
+    /// Intersecting triangle pairs at the last step, when the scene counts them.
+    pub self_intersections: Option<usize>,
     pub energy: f64,
     pub stats: &'a LoopStats,
     pub dropped_steps: u64,
@@ -38,13 +42,25 @@ pub struct DiagnosticsInput<'a> {
 pub const SLOW_RTF: f64 = 0.9;
 
 /// One `DiagnosticStatus` named `<name>: simulation`: ERROR after a divergence in the window,
-/// WARN when real time cannot be held even at the lowest allowed quality, when slower than real
+/// WARN when the cloth is tangled (self-intersecting, or pairs the fail-safe gave up on), when
+/// real time cannot be held even at the lowest allowed quality, when slower than real
 /// time or when inputs were dropped, else OK (saying so when quality is reduced).
 pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
     let (level, message) = if d.new_divergences > 0 {
         (
             DiagnosticStatus::ERROR,
             format!("{} divergence(s): cloth restored", d.new_divergences),
+        )
+    } else if d.unresolved_contacts > 0 || d.self_intersections.is_some_and(|n| n > 0) {
+        (
+            DiagnosticStatus::WARN,
+            format!(
+                "cloth tangled: {} self-intersecting triangle pair(s), {} cloth-cloth pair(s) \
+                 the collision fail-safe could not resolve",
+                d.self_intersections
+                    .map_or_else(|| "uncounted".into(), |n| n.to_string()),
+                d.unresolved_contacts
+            ),
         )
     } else if d.paused {
         (DiagnosticStatus::OK, "paused".to_string())
@@ -115,6 +131,12 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             format!("{:.6}", d.deepest_penetration),
         ),
         kv("exiting_vertices", d.exiting_vertices.to_string()),
+        kv("unresolved_contacts", d.unresolved_contacts.to_string()),
+        kv(
+            "self_intersections",
+            d.self_intersections
+                .map_or_else(|| "n/a".into(), |n| n.to_string()),
+        ),
         kv("energy_j", format!("{:.6}", d.energy)),
         kv("divergences", s.divergences.to_string()),
         kv("steps", s.steps.to_string()),
@@ -291,6 +313,8 @@ mod tests {
             contacts: 3,
             deepest_penetration: 0.0,
             exiting_vertices: 0,
+            unresolved_contacts: 0,
+            self_intersections: None,
             energy: 0.0,
             stats: &stats,
             dropped_steps: 0,
@@ -335,6 +359,23 @@ mod tests {
             .values
             .iter()
             .any(|kv| kv.key == "exiting_vertices" && kv.value == "40"));
+        d.exiting_vertices = 0;
+        d.self_intersections = Some(0);
+        assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::OK);
+        // A tangle: self-intersections, or pairs the fail-safe gave up on.
+        d.self_intersections = Some(218);
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s.message.contains("tangled: 218"), "{}", s.message);
+        d.self_intersections = None;
+        d.unresolved_contacts = 685;
+        let s = &diagnostics(&d).status[0];
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s.message.contains("uncounted") && s.message.contains("685"));
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "unresolved_contacts" && kv.value == "685"));
         d.new_divergences = 1;
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
     }

@@ -90,6 +90,8 @@ pub struct NodeParams {
     /// (`solver.guard.max_contact_split_levels`): a jump of the arm otherwise splits one frame
     /// into as many substeps as the link's motion has thirds of a cloth spacing.
     pub max_contact_split_levels: u32,
+    /// Reach joint states no faster than the URDF's joint velocity limits allow.
+    pub joint_velocity_limits: bool,
     /// Lower an implicit scene's quality to hold real time (see [`super::quality`]).
     pub adaptive_quality: bool,
     /// How low (`quality.min_substeps`, `quality.max_cg_tolerance`,
@@ -116,6 +118,7 @@ impl Default for NodeParams {
             paused: false,
             max_backlog_steps: 6,
             max_contact_split_levels: 2,
+            joint_velocity_limits: true,
             adaptive_quality: true,
             quality: QualityBounds::default(),
             service_wire: ServiceWire::Enhanced,
@@ -304,6 +307,7 @@ impl NodeParams {
             "use_sim_time" => self.use_sim_time = boolean(v)?,
             "paused" => self.paused = boolean(v)?,
             "adaptive_quality" => self.adaptive_quality = boolean(v)?,
+            "joint_velocity_limits" => self.joint_velocity_limits = boolean(v)?,
             "real_time_preview" => {
                 return Err(ParamError::Replaced {
                     by: "`adaptive_quality` (on by default: the node lowers quality only when \

@@ -37,6 +37,8 @@ struct Window {
     step_time_sum: f64,
     step_time_max: f64,
     deepest_penetration: f64,
+    /// Cloth-cloth pairs the collision fail-safe could not resolve.
+    unresolved_contacts: usize,
     dropped_at_start: u64,
     divergences_at_start: u64,
 }
@@ -60,6 +62,8 @@ pub struct SimLoop {
     contacts: usize,
     /// Vertices still on their way out of an obstacle the cloth started inside (last step).
     exiting: usize,
+    /// Intersecting triangle pairs at the last step, when the scene counts them.
+    self_intersections: Option<usize>,
     energy: f64,
     /// Adaptive quality (fixed at the scene's when `cfg.quality` is `None`).
     quality: QualityController,
@@ -97,6 +101,7 @@ impl SimLoop {
         let implicit = scene.solver.integrator == IntegratorKind::Implicit;
         let bounds = cfg.quality.unwrap_or_default();
         let quality = QualityController::new(full, &bounds, cfg.quality.is_some() && implicit);
+        let velocity_limits = cfg.joint_velocity_limits;
         let mut s = SimLoop {
             pacer: Pacer::new(dt, cfg.max_backlog_steps, now),
             publish: Schedule::new(cfg.publish_rate, now),
@@ -108,7 +113,7 @@ impl SimLoop {
             cfg,
             sim,
             driver: None,
-            joints: JointGate::default(),
+            joints: JointGate::new(velocity_limits),
             stats: LoopStats::default(),
             window: Window {
                 clock_start: now,
@@ -116,6 +121,7 @@ impl SimLoop {
             },
             contacts: 0,
             exiting: 0,
+            self_intersections: None,
             energy: 0.0,
             quality,
             step_cost: None,
@@ -317,6 +323,7 @@ impl SimLoop {
         let result = self.sim.step().map(|m| {
             (
                 (m.contacts, m.exiting_vertices),
+                (m.unresolved_contacts, m.self_intersections),
                 m.deepest_penetration,
                 m.kinetic_energy + m.potential_energy,
             )
@@ -331,8 +338,10 @@ impl SimLoop {
         self.window.step_time_sum += wall;
         self.window.step_time_max = self.window.step_time_max.max(wall);
         match result {
-            Ok(((contacts, exiting), depth, energy)) => {
+            Ok(((contacts, exiting), (unresolved, intersections), depth, energy)) => {
                 (self.contacts, self.exiting) = (contacts, exiting);
+                self.self_intersections = intersections;
+                self.window.unresolved_contacts += unresolved;
                 self.energy = energy;
                 self.window.deepest_penetration = self.window.deepest_penetration.max(depth);
                 let dt = self.sim.settings.dt;
@@ -449,6 +458,8 @@ impl SimLoop {
             contacts: self.contacts,
             deepest_penetration: w.deepest_penetration,
             exiting_vertices: self.exiting,
+            unresolved_contacts: w.unresolved_contacts,
+            self_intersections: self.self_intersections,
             energy: self.energy,
             stats: &self.stats,
             dropped_steps: self.pacer.dropped_steps(),

@@ -147,3 +147,21 @@ fn adaptive_quality_and_its_bounds() {
         assert!(e.contains(key), "{e}");
     }
 }
+
+#[test]
+fn joint_velocity_limits_on_by_default() {
+    let p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
+    assert!(p.joint_velocity_limits);
+    let off = format!("{FILE}    joint_velocity_limits: false\n");
+    assert!(
+        !NodeParams::from_yaml(&off, "f", "drape")
+            .unwrap()
+            .joint_velocity_limits
+    );
+    let mut p = p;
+    let e = p
+        .apply_overrides(&[("joint_velocity_limits".into(), "fast".into())])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("joint_velocity_limits"), "{e}");
+}
