@@ -156,3 +156,29 @@ fn bad_trajectories_name_the_point() {
     let empty: JointTrajectory = serde_yaml_ng::from_str("names: []\npoints: []\n").unwrap();
     assert_eq!(empty.validate(kin), Err(TrajectoryError::NoPoints));
 }
+
+/// A segment faster than a joint's URDF velocity limit is found, with the factor; a
+/// trajectory within the limits has none. drape_bot's elbow (2.5 rad/s): 1 rad in 0.2 s is 2x.
+#[test]
+fn a_trajectory_faster_than_a_velocity_limit_is_found() {
+    let robot = robot();
+    let kin = robot.kinematics();
+    let traj = |t1: f64| -> JointTrajectory {
+        serde_yaml_ng::from_str(&format!(
+            "names: [head_pan, right_elbow]
+points:
+  - {{ t: 0.0, positions: [0.0, 0.0] }}
+  - {{ t: 1.0, positions: [0.1, 0.0] }}
+  - {{ t: {t1}, positions: [0.1, -1.0] }}"
+        ))
+        .unwrap()
+    };
+    let fast = traj(1.2);
+    fast.validate(kin).unwrap();
+    let o = fast.overspeed(kin).expect("2x the elbow's limit");
+    assert_eq!(o.joint, "right_elbow");
+    assert_eq!((o.from_t, o.to_t, o.limit), (1.0, 1.2, 2.5));
+    assert!((o.factor - 2.0).abs() < 1e-9, "{}", o.factor);
+    assert!(o.to_string().contains("right_elbow"), "{o}");
+    assert_eq!(traj(1.5).overspeed(kin), None, "1 rad in 0.5 s: within 2.5 rad/s");
+}

@@ -159,6 +159,30 @@ pub struct TrajectoryPoint {
     pub positions: Vec<f64>,
 }
 
+/// A trajectory segment faster than a joint's URDF velocity limit
+/// ([`JointTrajectory::overspeed`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Overspeed {
+    pub joint: String,
+    pub from_t: f64,
+    pub to_t: f64,
+    /// The joint's speed over the segment, in multiples of its limit (> 1).
+    pub factor: f64,
+    /// The limit (rad/s or m/s).
+    pub limit: f64,
+}
+
+impl std::fmt::Display for Overspeed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "joint `{}` moves at {:.3} times its URDF velocity limit ({}) between t = {} s and \
+             {} s",
+            self.joint, self.factor, self.limit, self.from_t, self.to_t
+        )
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TrajectoryError {
     #[error("trajectory has no points")]
@@ -231,6 +255,42 @@ impl JointTrajectory {
             .zip(&b.positions)
             .map(|(x, y)| x + (y - x) * s)
             .collect()
+    }
+
+    /// The segment where a joint moves fastest against its URDF velocity limit, when one moves
+    /// faster than it (the cloth then sees a motion the robot cannot make). Call after
+    /// [`JointTrajectory::validate`].
+    pub fn overspeed(&self, kin: &Kinematics) -> Option<Overspeed> {
+        let at = |p: &TrajectoryPoint| {
+            let mut q = kin.zero_positions();
+            let input = JointInput {
+                names: self.names.clone(),
+                positions: p.positions.clone(),
+                velocities: None,
+            };
+            input.apply(kin, &mut q).ok().map(|()| q)
+        };
+        let mut worst: Option<Overspeed> = None;
+        for w in self.points.windows(2) {
+            let (Some(a), Some(b)) = (at(&w[0]), at(&w[1])) else {
+                continue;
+            };
+            let Some((ji, t)) = kin.slowest_joint(&a, &b) else {
+                continue;
+            };
+            let factor = t / (w[1].t - w[0].t);
+            if factor > 1.0 && worst.as_ref().is_none_or(|o| factor > o.factor) {
+                let j = &kin.joints()[ji];
+                worst = Some(Overspeed {
+                    joint: j.name.clone(),
+                    from_t: w[0].t,
+                    to_t: w[1].t,
+                    factor,
+                    limit: j.velocity_limit.unwrap_or(0.0),
+                });
+            }
+        }
+        worst
     }
 
     /// The trajectory sampled at `t` as a [`JointInput`].

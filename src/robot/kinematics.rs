@@ -378,13 +378,26 @@ impl Kinematics {
     /// to `to` (positions as FK uses them, clamped to their limits) at or below that limit; 0
     /// when none has one or none moves. Free and mimic joints follow what is commanded.
     pub fn slew_time(&self, from: &JointPositions, to: &JointPositions) -> f64 {
+        self.slowest_joint(from, to).map_or(0.0, |(_, t)| t)
+    }
+
+    /// The joint that takes longest at its velocity limit from `from` to `to`, and how long
+    /// (see [`Kinematics::slew_time`]).
+    pub fn slowest_joint(
+        &self,
+        from: &JointPositions,
+        to: &JointPositions,
+    ) -> Option<(usize, f64)> {
         self.actuated_joints()
             .filter_map(|(ji, j)| {
                 let v = j.velocity_limit?;
                 let d = self.effective_position(to, ji).0 - self.effective_position(from, ji).0;
-                Some(d.abs() / v)
+                Some((ji, d.abs() / v))
             })
-            .fold(0.0, f64::max)
+            .fold(None, |a, b| match a {
+                Some(a) if a.1 >= b.1 => Some(a),
+                _ => Some(b),
+            })
     }
 
     /// Names of the joints a user commands: scalar, not mimic (in joint index order).

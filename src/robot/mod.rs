@@ -12,7 +12,7 @@ pub mod urdf;
 pub use driver::{joint_stream, JointSource, RobotDriver};
 pub use grasp::{Grasp, GraspError, GraspEvent, Hysteresis, PadBox};
 pub use joint_input::{
-    apply_free_poses, JointInput, JointInputError, JointTrajectory, TrajectoryError,
+    apply_free_poses, JointInput, JointInputError, JointTrajectory, Overspeed, TrajectoryError,
     TrajectoryPoint,
 };
 pub use kinematics::{FkReport, Joint, JointKind, JointPositions, Kinematics, Mimic, TreeError};

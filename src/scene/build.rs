@@ -177,6 +177,11 @@ fn load_robot(scene: &Scene, r: &RobotSpec) -> Result<RobotDriver, SceneError> {
         Some(tr) => {
             tr.validate(robot.kinematics())
                 .map_err(|e| trajectory_error(scene, tr, e))?;
+            if let Some(o) = tr.overspeed(robot.kinematics()) {
+                // Not an error: a scene may script a motion faster than the robot's, but the
+                // cloth then sees links faster than any real run of it.
+                log::warn!("scene {}: robot.trajectory: {o}", scene.origin());
+            }
             JointSource::Trajectory(tr.clone())
         }
         None => JointSource::Still,
