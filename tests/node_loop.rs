@@ -508,4 +508,6 @@ cloths:
     assert!(s.message.contains("cloth tangled"), "{}", s.message);
     let n: usize = value(last, "self_intersections").parse().expect("counted");
     assert!(n > 0);
+    let stretch: f64 = value(last, "max_edge_stretch").parse().expect("a number");
+    assert!(stretch.is_finite() && stretch >= 0.0, "{stretch}");
 }

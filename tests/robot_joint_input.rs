@@ -180,5 +180,9 @@ points:
     assert_eq!((o.from_t, o.to_t, o.limit), (1.0, 1.2, 2.5));
     assert!((o.factor - 2.0).abs() < 1e-9, "{}", o.factor);
     assert!(o.to_string().contains("right_elbow"), "{o}");
-    assert_eq!(traj(1.5).overspeed(kin), None, "1 rad in 0.5 s: within 2.5 rad/s");
+    assert_eq!(
+        traj(1.5).overspeed(kin),
+        None,
+        "1 rad in 0.5 s: within 2.5 rad/s"
+    );
 }

@@ -27,6 +27,9 @@ pub struct DiagnosticsInput<'a> {
     pub unresolved_contacts: usize,
     /// Intersecting triangle pairs at the last step, when the scene counts them.
     pub self_intersections: Option<usize>,
+    /// Largest relative edge stretch over the window's steps (`Cloth::max_edge_stretch`, the
+    /// recordings' key): the response keeps a state the guard could not better, and says so here.
+    pub max_edge_stretch: f64,
     pub energy: f64,
     pub stats: &'a LoopStats,
     pub dropped_steps: u64,
@@ -137,6 +140,7 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             d.self_intersections
                 .map_or_else(|| "n/a".into(), |n| n.to_string()),
         ),
+        kv("max_edge_stretch", format!("{:.4}", d.max_edge_stretch)),
         kv("energy_j", format!("{:.6}", d.energy)),
         kv("divergences", s.divergences.to_string()),
         kv("steps", s.steps.to_string()),
@@ -315,6 +319,7 @@ mod tests {
             exiting_vertices: 0,
             unresolved_contacts: 0,
             self_intersections: None,
+            max_edge_stretch: 0.02,
             energy: 0.0,
             stats: &stats,
             dropped_steps: 0,
@@ -376,6 +381,10 @@ mod tests {
             .values
             .iter()
             .any(|kv| kv.key == "unresolved_contacts" && kv.value == "685"));
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "max_edge_stretch" && kv.value == "0.0200"));
         d.new_divergences = 1;
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
     }

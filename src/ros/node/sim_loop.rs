@@ -39,6 +39,7 @@ struct Window {
     deepest_penetration: f64,
     /// Cloth-cloth pairs the collision fail-safe could not resolve.
     unresolved_contacts: usize,
+    max_edge_stretch: f64,
     dropped_at_start: u64,
     divergences_at_start: u64,
 }
@@ -342,6 +343,8 @@ impl SimLoop {
                 (self.contacts, self.exiting) = (contacts, exiting);
                 self.self_intersections = intersections;
                 self.window.unresolved_contacts += unresolved;
+                self.window.max_edge_stretch =
+                    (self.window.max_edge_stretch).max(self.sim.cloth.max_edge_stretch());
                 self.energy = energy;
                 self.window.deepest_penetration = self.window.deepest_penetration.max(depth);
                 let dt = self.sim.settings.dt;
@@ -460,6 +463,7 @@ impl SimLoop {
             exiting_vertices: self.exiting,
             unresolved_contacts: w.unresolved_contacts,
             self_intersections: self.self_intersections,
+            max_edge_stretch: w.max_edge_stretch,
             energy: self.energy,
             stats: &self.stats,
             dropped_steps: self.pacer.dropped_steps(),
