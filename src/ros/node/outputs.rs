@@ -28,7 +28,7 @@ pub struct DiagnosticsInput<'a> {
     /// Intersecting triangle pairs at the last step, when the scene counts them.
     pub self_intersections: Option<usize>,
     /// Largest relative edge stretch over the window's steps (`Cloth::max_edge_stretch`, the
-    /// recordings' key): the response keeps a state the guard could not better, and says so here.
+    /// recordings' key): a state the guard kept at its deepest subdivision shows here.
     pub max_edge_stretch: f64,
     pub energy: f64,
     pub stats: &'a LoopStats,
