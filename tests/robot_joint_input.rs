@@ -158,7 +158,8 @@ fn bad_trajectories_name_the_point() {
 }
 
 /// A segment faster than a joint's URDF velocity limit is found, with the factor; a
-/// trajectory within the limits has none. drape_bot's elbow (2.5 rad/s): 1 rad in 0.2 s is 2x.
+/// trajectory within or at the limits has none. drape_bot's elbow (2.5 rad/s): 1 rad in 0.2 s
+/// is 2x.
 #[test]
 fn a_trajectory_faster_than_a_velocity_limit_is_found() {
     let robot = robot();
@@ -184,5 +185,10 @@ points:
         traj(1.5).overspeed(kin),
         None,
         "1 rad in 0.5 s: within 2.5 rad/s"
+    );
+    assert_eq!(
+        traj(1.4).overspeed(kin),
+        None,
+        "1 rad in 0.4 s: at the limit"
     );
 }
