@@ -222,12 +222,7 @@ impl JointTrajectory {
                 return Err(TrajectoryError::Time { index, t: p.t });
             }
             prev = p.t;
-            let input = JointInput {
-                names: self.names.clone(),
-                positions: p.positions.clone(),
-                velocities: None,
-            };
-            input
+            self.input(p.positions.clone())
                 .validate(kin)
                 .map_err(|source| TrajectoryError::Input { index, source })?;
         }
@@ -263,12 +258,8 @@ impl JointTrajectory {
     pub fn overspeed(&self, kin: &Kinematics) -> Option<Overspeed> {
         let at = |p: &TrajectoryPoint| {
             let mut q = kin.zero_positions();
-            let input = JointInput {
-                names: self.names.clone(),
-                positions: p.positions.clone(),
-                velocities: None,
-            };
-            input.apply(kin, &mut q).ok().map(|()| q)
+            let applied = self.input(p.positions.clone()).apply(kin, &mut q);
+            applied.ok().map(|()| q)
         };
         let mut worst: Option<Overspeed> = None;
         for w in self.points.windows(2) {
@@ -297,9 +288,14 @@ impl JointTrajectory {
 
     /// The trajectory sampled at `t` as a [`JointInput`].
     pub fn input_at(&self, t: f64) -> JointInput {
+        self.input(self.positions_at(t))
+    }
+
+    /// `positions` (in the order of `names`) as a [`JointInput`].
+    fn input(&self, positions: Vec<f64>) -> JointInput {
         JointInput {
             names: self.names.clone(),
-            positions: self.positions_at(t),
+            positions,
             velocities: None,
         }
     }

@@ -394,10 +394,7 @@ impl Kinematics {
                 let d = self.effective_position(to, ji).0 - self.effective_position(from, ji).0;
                 Some((ji, d.abs() / v))
             })
-            .fold(None, |a, b| match a {
-                Some(a) if a.1 >= b.1 => Some(a),
-                _ => Some(b),
-            })
+            .reduce(|a, b| if b.1 > a.1 { b } else { a })
     }
 
     /// Names of the joints a user commands: scalar, not mimic (in joint index order).
