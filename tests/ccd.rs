@@ -125,6 +125,19 @@ fn edge_edge_analytic() {
     );
 }
 
+/// A cloth edge 8 mm above a box corner, the end of a box edge that leaves the corner down and
+/// sideways: the contact is the corner's with the cloth edge, and its normal the separation
+/// (up), not the two edges' plane normal (45 degrees off, along which the gap reads 5.7 mm and a
+/// push moved the cloth sideways).
+#[test]
+fn edge_edge_closest_at_an_end_of_the_second_edge_takes_the_separation() {
+    let p = [v(0.0, -0.01, 0.008), v(0.0, 0.01, 0.008)];
+    let q = [v(0.0, 0.0, 0.0), v(0.1, 0.0, -0.1)];
+    let h = edge_edge_ccd_thick(p, p, q, q, 0.0081).expect("within the contact distance");
+    assert!(h.u.abs() < 1e-12, "u {}", h.u);
+    assert!(h.normal.distance(Vec3::Z) < 1e-9, "normal {:?}", h.normal);
+}
+
 #[test]
 fn thick_vertex_triangle_first_time_of_approach() {
     // Point descending above the face: distance 1 - 2t reaches eta = 0.1 at t = 0.45.
