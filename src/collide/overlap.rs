@@ -142,13 +142,27 @@ impl CollisionStage {
             return;
         }
         let mesh = Mesh::of(&self.feature_collider, x, n);
+        let thickness = &self.thickness;
+        // The solids whose contact layer vertex `v` lies in without being inside (`rim`).
+        let layer_of = |v: usize| -> Vec<usize> {
+            (obstacles.iter().enumerate())
+                .filter(|(_, o)| {
+                    let local = o.pose.inverse_transform_point(x[v]);
+                    o.in_layer(local, thickness[v]).is_some()
+                })
+                .map(|(k, _)| k)
+                .collect()
+        };
+        let mut rim: Vec<Vec<usize>> = vec![Vec::new(); n];
         let mut seen = vec![false; n];
         let mut patch = Vec::new();
         for seed in 0..n {
             if inside[seed].is_empty() || seen[seed] {
                 continue;
             }
-            // One patch, by a walk over the edges between inside vertices.
+            // One patch, by a walk over the edges between vertices inside or in the contact
+            // layer (the rim: left to the vertex pass, each would be pushed to its nearest face
+            // at once, in the cloth's plane where the cloth cuts a solid).
             seen[seed] = true;
             patch.clear();
             patch.push(seed);
@@ -175,9 +189,16 @@ impl CollisionStage {
                             crossings += 1;
                         }
                     }
+                    if !seen[w] && !kinematic.contains(&(w as u32)) {
+                        rim[w] = layer_of(w);
+                        if !rim[w].is_empty() {
+                            seen[w] = true;
+                            patch.push(w);
+                        }
+                    }
                 }
             }
-            if patch.iter().any(|v| kinematic.contains(&(*v as u32))) {
+            if (patch.iter()).any(|&v| !inside[v].is_empty() && kinematic.contains(&(v as u32))) {
                 continue;
             }
             let dir = if crossings > 0 && crossing.length() >= AGREE * crossings as f64 {
@@ -194,7 +215,10 @@ impl CollisionStage {
                         })
                         .sum()
                 };
-                let m = mesh.patch_normal(&patch);
+                let core: Vec<usize> = (patch.iter().copied())
+                    .filter(|&v| !inside[v].is_empty())
+                    .collect();
+                let m = mesh.patch_normal(&core);
                 if way(-m) < way(m) {
                     -m
                 } else {
@@ -202,18 +226,35 @@ impl CollisionStage {
                 }
             };
             for &v in &patch {
+                // Inside vertices leave every solid they are in; rim vertices the layers `dir`
+                // leads out of (one under a face `dir` leads into stays the vertex pass's).
+                let local_dir = |oi: usize| obstacles[oi].pose.rotation.inverse() * dir;
+                let leaves: Vec<usize> = if inside[v].is_empty() {
+                    (rim[v].iter().copied())
+                        .filter(|&oi| {
+                            let o = &obstacles[oi];
+                            let local = o.pose.inverse_transform_point(x[v]);
+                            o.layer_step(local, local_dir(oi), thickness[v]).is_some()
+                        })
+                        .collect()
+                } else {
+                    inside[v].clone()
+                };
+                if leaves.is_empty() {
+                    continue;
+                }
                 // A vertex without edges (or only zero-length ones) moves a thickness a pass.
                 let edge = Some(mesh.shortest[v]).filter(|e| e.is_finite() && *e > 0.0);
-                let cap = edge.map_or(self.thickness[v], |e| EXIT_STEP * e);
+                let cap = edge.map_or(thickness[v], |e| EXIT_STEP * e);
                 let first = self.exit_neighbours.len() as u32;
                 self.exit_neighbours
                     .extend(mesh.neighbours(v).map(|w| w as u32));
                 let count = self.exit_neighbours.len() as u32 - first;
-                for &oi in &inside[v] {
+                for oi in leaves {
                     self.exits.push(Exit {
                         vertex: v as u32,
                         obstacle: oi as u32,
-                        dir: obstacles[oi].pose.rotation.inverse() * dir,
+                        dir: local_dir(oi),
                         cap,
                         edge_inside: false,
                         first,
@@ -236,6 +277,7 @@ impl CollisionStage {
             return;
         }
         let (obstacles, neighbours) = (&self.obstacles, &self.exit_neighbours);
+        let thickness = &self.thickness;
         self.exits.retain_mut(|e| {
             let o = &obstacles[e.obstacle as usize];
             let i = e.vertex as usize;
@@ -246,7 +288,7 @@ impl CollisionStage {
                 return false;
             }
             let local = o.pose.inverse_transform_point(p);
-            if o.contains_local(local) {
+            if o.contains_local(local) || o.layer_step(local, e.dir, thickness[i]).is_some() {
                 return true;
             }
             // Out: it waits for its neighbours, and goes on out while an edge of its cuts the

@@ -56,9 +56,12 @@ pub(crate) fn obstacle_vertex(
     let a = o.pose_prev.inverse_transform_point(inp.x0);
     let mut p = o.pose.inverse_transform_point(*x);
     if let Some((dir, cap, edge_inside)) = inp.exit {
+        // Out of the solid it goes on while an edge of it cuts the solid, or while it is inside
+        // the contact layer: there the patch's way out, not the nearest face, sets its path.
         let step = match o.exit_along(p, dir) {
             Some(depth) => Some((depth + th).min(cap)),
-            None => edge_inside.then_some(cap),
+            None if edge_inside => Some(cap),
+            None => o.layer_step(p, dir, th).map(|gap| gap.min(cap)),
         };
         if let Some(step) = step {
             return Some(lead_out(o, obstacle, inp, dir, step, p, x, v));

@@ -7,6 +7,15 @@ use super::surface::{SurfaceHit, SurfacePoint};
 use crate::Vec3;
 use parry3d::query::{PointProjection, Ray};
 
+/// A point this share of the thickness inside the layer is on its edge (where a push or the
+/// implicit filter left it), not in it.
+const LAYER_TOLERANCE: f64 = 1e-3;
+
+/// Cosine with the surface normal below which a direction leads into a solid: a vertex beside a
+/// box's side face (normal across `dir`) may follow a patch leaving upwards, one under its bottom
+/// face may not.
+const INTO: f64 = 0.2;
+
 impl Obstacle {
     /// Closest surface point to local point `p`; `hint` (local) orients the normal of two-sided
     /// surfaces when `p` lies on them.
@@ -133,6 +142,27 @@ impl Obstacle {
             Geom::Solid => self.shape.contains_local_point(p.as_vec3()),
             Geom::Surface => false,
         }
+    }
+
+    /// The outward normal and depth (`th` minus the distance) of local point `p` when it lies
+    /// outside a solid but inside its contact layer of thickness `th`; `None` when clear, inside,
+    /// or not a solid.
+    pub(crate) fn in_layer(&self, p: Vec3, th: f64) -> Option<(Vec3, f64)> {
+        if matches!(self.geom, Geom::Surface) || self.contains_local(p) {
+            return None;
+        }
+        let sp = self.closest_local(p, p);
+        let gap = th - sp.signed_distance;
+        (gap > th * LAYER_TOLERANCE).then_some((sp.normal, gap))
+    }
+
+    /// How far local point `p`, in the contact layer (see [`Self::in_layer`]), moves along unit
+    /// `dir` in one go to clear it: its depth in the layer (exact along the surface normal,
+    /// repeated elsewhere); `None` when it is not in the layer or `dir` leads into the solid
+    /// (more than [`INTO`] against the surface normal).
+    pub(crate) fn layer_step(&self, p: Vec3, dir: Vec3, th: f64) -> Option<f64> {
+        let (normal, gap) = self.in_layer(p, th)?;
+        (normal.dot(dir) >= -INTO).then_some(gap)
     }
 
     /// How far local point `p`, inside a solid, must travel along unit `dir` to leave it (the
