@@ -3,8 +3,9 @@
 
 use crate::Vec3;
 
-/// One vertex that started inside a solid obstacle, and how it leaves: along `dir` (unit, in
-/// the obstacle's frame, so it turns with the obstacle) by at most `cap` per collision pass.
+/// One vertex that started inside a solid obstacle (or in its contact layer, on the rim of a
+/// patch inside), and how it leaves: along `dir` (unit, in the obstacle's frame, so it turns
+/// with the obstacle) by at most `cap` per collision pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Exit {
     pub vertex: u32,

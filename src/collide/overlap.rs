@@ -121,7 +121,9 @@ impl CollisionStage {
     /// surface to cloth outside (the way it came in), or, where those disagree or there are
     /// none, across the cloth to the side with the shorter total way out. Vertices then move
     /// out by at most [`EXIT_STEP`] of their shortest edge per collision pass, so the solve
-    /// carries the cloth around them along.
+    /// carries the cloth around them along. The patch's rim (vertices connected to it outside
+    /// the solid but inside a solid's contact layer) leaves along the same direction until it is
+    /// clear of the layer, unless that direction leads into the solid there.
     ///
     /// A patch holding a kinematic vertex (`kinematic`: pinned or attached inside by the scene)
     /// gets no plan: it cannot leave as one, and its free vertices are projected to their
@@ -266,8 +268,9 @@ impl CollisionStage {
         self.exits.sort_unstable_by_key(|e| (e.vertex, e.obstacle));
     }
 
-    /// Drops the exits of vertices that are out, with their mesh neighbours out and every mesh
-    /// edge of theirs clear of the solid (`x` the positions a pass ended in), and of kinematic
+    /// Drops the exits of vertices that are out of the solid and of its contact layer along
+    /// their way, with their mesh neighbours out and every mesh edge of theirs clear of the solid
+    /// (`x` the positions a pass ended in), and of kinematic
     /// ones (`inv_mass` 0: pinned or held inside by the scene, not on their way out). A vertex
     /// out of the solid whose edge still cuts through it keeps going along its way out: retired
     /// alone, the forearm's axis pushed such an edge, 9 mm from the axis of a 40 mm cylinder,
