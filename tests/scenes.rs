@@ -224,6 +224,27 @@ fn effects_a_scene_does_not_name_are_never_evaluated() {
     assert!(!flag.effects().names().contains(&"twist"));
 }
 
+/// The effects a built scene reports (`drape check` prints them) are the scene's own names, each
+/// once: `damping` builds two terms here (along springs, against the air), which `drape check`
+/// listed as `damping` twice.
+#[test]
+fn a_built_scene_names_each_of_its_effects_once() {
+    let sim = load("hanging.yaml").build().unwrap();
+    let names = sim.effects().names();
+    assert_eq!(
+        names.iter().filter(|n| **n == "damping").count(),
+        1,
+        "{names:?}"
+    );
+    assert!(
+        sim.effects()
+            .iter()
+            .filter(|e| e.name() == "damping")
+            .count()
+            >= 2
+    );
+}
+
 #[test]
 fn bad_scenes_name_the_key_and_reason() {
     let base =

@@ -96,8 +96,16 @@ impl EffectSet {
         self.entries().map(|e| e.effect)
     }
 
+    /// The scene's effects that built force terms, in scene order, each once (`damping` builds
+    /// up to three terms: along springs, against the air, diffusion).
     pub fn names(&self) -> Vec<&'static str> {
-        self.iter().map(|e| e.name()).collect()
+        let mut names: Vec<&'static str> = Vec::new();
+        for name in self.iter().map(|e| e.name()) {
+            if !names.contains(&name) {
+                names.push(name);
+            }
+        }
+        names
     }
 
     pub fn is_empty(&self) -> bool {
