@@ -62,6 +62,7 @@ cases!(
     degenerate_mesh,
     pinned_inside_obstacle,
     cape_hem_inside_base,
+    arm_lying_in_cloth,
     wind_50_m_s,
     long_run_10_min,
     self_towel_shaken_at_velocity_limits,

@@ -42,6 +42,7 @@ pub use held::HeldNormals;
 pub use motion::Motion;
 pub use obstacle::{Obstacle, ObstacleError};
 pub use overlap::Overlap;
+pub(crate) use overlap::EXIT_STEP;
 pub use report::CollisionReport;
 pub use resolve::{ContactKind, StageRollback};
 pub use self_contact::SelfContactReport;

@@ -89,7 +89,7 @@ fn depth_inside(o: &Obstacle, p: Vec3) -> Option<f64> {
 /// The share of a vertex's shortest mesh edge one pass may move it out: the strain one
 /// correction hands the next solve (as fast contact lets an obstacle move a third of a spacing
 /// per substep, and self-contact pushes a pair at most a third of an edge).
-const EXIT_STEP: f64 = 1.0 / 6.0;
+pub(crate) const EXIT_STEP: f64 = 1.0 / 6.0;
 
 /// The cloth vertices inside one obstacle.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,8 +122,9 @@ impl CollisionStage {
     /// none, across the cloth to the side with the shorter total way out. Vertices then move
     /// out by at most [`EXIT_STEP`] of their shortest edge per collision pass, so the solve
     /// carries the cloth around them along. The patch's rim (vertices connected to it outside
-    /// the solid but inside a solid's contact layer) leaves along the same direction until it is
-    /// clear of the layer, unless that direction leads into the solid there.
+    /// the solid but inside a solid's contact layer), and any patch vertex in another solid's
+    /// layer, leaves that layer along the same direction, unless the direction leads into the
+    /// solid there.
     ///
     /// A patch holding a kinematic vertex (`kinematic`: pinned or attached inside by the scene)
     /// gets no plan: it cannot leave as one, and its free vertices are projected to their
@@ -228,20 +229,20 @@ impl CollisionStage {
                 }
             };
             for &v in &patch {
-                // Inside vertices leave every solid they are in; rim vertices the layers `dir`
-                // leads out of (one under a face `dir` leads into stays the vertex pass's).
+                // Every vertex leaves the solids it is in and the contact layers `dir` leads out
+                // of (one under a face `dir` leads into stays the vertex pass's). A vertex inside
+                // the palm and in a finger's layer, left to the vertex pass for the finger, was
+                // pushed 5.4 mm along the cloth in one pass (1.67x rest at 44 x 44).
                 let local_dir = |oi: usize| obstacles[oi].pose.rotation.inverse() * dir;
-                let leaves: Vec<usize> = if inside[v].is_empty() {
-                    (rim[v].iter().copied())
-                        .filter(|&oi| {
-                            let o = &obstacles[oi];
-                            let local = o.pose.inverse_transform_point(x[v]);
-                            o.layer_step(local, local_dir(oi), thickness[v]).is_some()
-                        })
-                        .collect()
-                } else {
-                    inside[v].clone()
-                };
+                if !inside[v].is_empty() {
+                    rim[v] = layer_of(v);
+                }
+                let mut leaves = inside[v].clone();
+                leaves.extend((rim[v].iter().copied()).filter(|&oi| {
+                    let o = &obstacles[oi];
+                    let local = o.pose.inverse_transform_point(x[v]);
+                    o.layer_step(local, local_dir(oi), thickness[v]).is_some()
+                }));
                 if leaves.is_empty() {
                     continue;
                 }

@@ -3,7 +3,10 @@
 //! the parser and the builder are part of what is tested) or, for degenerate geometry the scene
 //! format cannot express, from a hand-made mesh. Bounds are derived in the comments next to them.
 
-use super::edge::{cape_hem_inside_base, degenerate_mesh, long_run, pinned_inside_obstacle, wind};
+use super::edge::{
+    arm_lying_in_cloth, cape_hem_inside_base, degenerate_mesh, long_run, pinned_inside_obstacle,
+    wind,
+};
 use super::fast_links::rod_through_sheet;
 use super::hanging::{
     heavy_cloth, huge_cloth, light_cloth, stiff_explicit_near_limit, stiff_explicit_over_limit,
@@ -34,6 +37,7 @@ pub fn catalogue() -> Vec<(&'static str, CaseFn)> {
         ("degenerate_mesh", degenerate_mesh),
         ("pinned_inside_obstacle", pinned_inside_obstacle),
         ("cape_hem_inside_base", cape_hem_inside_base),
+        ("arm_lying_in_cloth", arm_lying_in_cloth),
         ("wind_50_m_s", wind),
         ("long_run_10_min", long_run),
         ("self_towel_shaken_at_velocity_limits", towel_shaken),
