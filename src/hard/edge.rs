@@ -209,7 +209,7 @@ pub(super) fn arm_lying_in_cloth(res: Resolution) -> Result<Case, HardError> {
     let mut criteria = Criteria::base(1.5, (2.0 * G * 0.64).sqrt());
     criteria.energy = EnergyCheck::NotMeasured;
     criteria.max_penetration = Some(0.008);
-    criteria.max_stretch = Some(1.0 + 2.0 * crate::collide::EXIT_STEP);
+    criteria.max_stretch = Some(1.0 + 2.0 * crate::collide::overlap::EXIT_STEP);
     Ok(Case {
         name,
         description: "robot_drape_arm with the cloth lowered onto the still arm's axis: the \
