@@ -1,17 +1,15 @@
 //! Edge cases of the input: a degenerate mesh, a vertex pinned inside an obstacle, a cape whose
 //! hem starts inside the robot's base, 50 m/s wind, a ten-minute run.
 
-use super::setup::{build, fill, parse, pick, G};
+use super::setup::{build, bundled_scene, fill, parse, pick, G};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
 use crate::cloth::topology::{bending_stencils, springs, SpringKind};
 use crate::cloth::{Cloth, Material, Panel};
 use crate::effects::{AirDrag, Bending, EffectSet, Gravity, SpringDamping, Springs};
 use crate::integrate::{ImplicitSettings, IntegratorKind};
-use crate::scene::Scene;
 use crate::sim::{Frames, GuardSettings, Simulation, StepSettings};
 use crate::Vec3;
 use glam::DVec2;
-use std::path::PathBuf;
 
 /// A 0.3 m grid mesh with the defects a garment mesher can produce: a vertex coincident with a
 /// corner (zero-length spring, zero-area triangle), a vertex on an edge (zero-area collinear
@@ -153,10 +151,7 @@ collision: { mode: continuous }
 /// edge at 4.46x rest, 7952 guard subdivisions in 2 s).
 pub(super) fn cape_hem_inside_base(res: Resolution) -> Result<Case, HardError> {
     let name = "cape_hem_inside_base";
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join("robot_cape.yaml");
-    let mut scene = Scene::load(&path).map_err(|source| HardError::Scene { case: name, source })?;
+    let mut scene = bundled_scene(name, "robot_cape.yaml")?;
     let per_side = pick(res, 24, 48);
     let g = &mut scene.cloths[0].grid;
     g.size = [0.6, 0.65];
@@ -193,10 +188,7 @@ pub(super) fn cape_hem_inside_base(res: Resolution) -> Result<Case, HardError> {
 /// the patch, the vertex pass pushed it sideways in the cloth's plane: 2.91x rest (friction 0.5).
 pub(super) fn arm_lying_in_cloth(res: Resolution) -> Result<Case, HardError> {
     let name = "arm_lying_in_cloth";
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join("robot_drape_arm.yaml");
-    let mut scene = Scene::load(&path).map_err(|source| HardError::Scene { case: name, source })?;
+    let mut scene = bundled_scene(name, "robot_drape_arm.yaml")?;
     let per_side = pick(res, 22, 44);
     let g = &mut scene.cloths[0].grid;
     g.resolution = [per_side, per_side];

@@ -3,10 +3,9 @@
 //! in a bundled robot or garment scene: a towel shaken at the joint-velocity limits, a cape under
 //! swinging arms, a sleeve sewn and worn while the arm moves, a towel picked from a table.
 
-use super::setup::{fill, impact_stretch_bound, pick, G};
+use super::setup::{bundled_scene, fill, impact_stretch_bound, pick, G};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
 use crate::scene::Scene;
-use std::path::PathBuf;
 
 /// A bundled scene (config/) with self-collision and its exact intersection count switched on,
 /// grid cloths at `res` vertices per side and garments at `edge` (m) when given.
@@ -16,10 +15,7 @@ fn bundled(
     res: Option<usize>,
     edge: Option<f64>,
 ) -> Result<Scene, HardError> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("config")
-        .join(file);
-    let mut s = Scene::load(&path).map_err(|source| HardError::Scene { case, source })?;
+    let mut s = bundled_scene(case, file)?;
     self_on(&mut s);
     if let Some(r) = res {
         s.cloths.iter_mut().for_each(|c| c.grid.resolution = [r, r]);

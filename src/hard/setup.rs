@@ -30,6 +30,14 @@ pub(super) fn parse(case: &'static str, text: &str) -> Result<Scene, HardError> 
     Ok(s)
 }
 
+/// Bundled scene `file` of `config/`, loaded for `case`.
+pub(super) fn bundled_scene(case: &'static str, file: &str) -> Result<Scene, HardError> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("config")
+        .join(file);
+    Scene::load(&path).map_err(|source| HardError::Scene { case, source })
+}
+
 pub(super) fn build(case: &'static str, scene: &Scene) -> Result<Simulation, HardError> {
     scene
         .build()
