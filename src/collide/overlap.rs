@@ -12,7 +12,7 @@
 
 use super::exit::Exit;
 use super::features::FeatureCollider;
-use super::obstacle::Obstacle;
+use super::obstacle::{Obstacle, ON_SURFACE};
 use super::ring::one_ring;
 use super::stage::CollisionStage;
 use crate::Vec3;
@@ -70,12 +70,6 @@ impl Mesh {
         (patch.iter().map(|&v| self.normal[v]).sum::<Vec3>()).normalize_or(Vec3::Z)
     }
 }
-
-/// Depth (m) below which a vertex lies on a solid's surface, not inside it: cloth laid exactly on
-/// a face (robot_cape's hem on drape_bot's base box, z = 0.4 - 0.3 against 0.05 + 0.05) lands a
-/// rounding error on either side, and every run of that scene warned of 5 vertices inside at
-/// "0.0 mm" and planned their way out.
-const ON_SURFACE: f64 = 1e-9;
 
 /// How deep local point `p` is inside solid `o`, when deeper than [`ON_SURFACE`].
 fn depth_inside(o: &Obstacle, p: Vec3) -> Option<f64> {

@@ -51,6 +51,10 @@ pub struct CollisionStage {
     pub(super) exits: Vec<Exit>,
     /// The exits' mesh neighbours (see [`Exit::first`]).
     pub(super) exit_neighbours: Vec<u32>,
+    /// Per vertex, how far the lead-outs moved it in the current vertex pass (reused): a vertex
+    /// inside two solids (where the upper arm meets the forearm) follows both plans, and the
+    /// two share one step.
+    pub(super) exit_moved: Vec<f64>,
 }
 
 impl CollisionStage {
@@ -118,6 +122,7 @@ impl CollisionStage {
             near: Vec::new(),
             exits: Vec::new(),
             exit_neighbours: Vec::new(),
+            exit_moved: Vec::new(),
         })
     }
 

@@ -87,6 +87,10 @@ impl CollisionStage {
         // whose x range can meet its own (the cloth is a sheet, so a 1-D sweep prunes well).
         let boxes = &self.vertex_boxes;
         self.order.clear();
+        self.exit_moved.clear();
+        if !self.exits.is_empty() {
+            self.exit_moved.resize(n, 0.0);
+        }
         self.order.extend(
             (0..n as u32).filter(|&i| boxes[i as usize].lo.cmple(boxes[i as usize].hi).all()),
         );
@@ -105,6 +109,7 @@ impl CollisionStage {
             let ob = Aabb { lo: olo, hi: ohi };
             let friction = &self.friction;
             let exits = &self.exits;
+            let moved = &self.exit_moved;
             let boxes = &self.vertex_boxes;
             // Skipped vertices carry the empty box, which an unbounded box would still "overlap".
             let meets = |i: usize| boxes[i].lo.cmple(boxes[i].hi).all() && boxes[i].overlaps(&ob);
@@ -145,7 +150,8 @@ impl CollisionStage {
                                 .get(i)
                                 .copied()
                                 .unwrap_or([Vec3::ZERO; 3]),
-                            exit: exit_of(exits, i, oi).map(|e| (e.dir, e.cap, e.edge_inside)),
+                            exit: exit_of(exits, i, oi)
+                                .map(|e| (e.dir, (e.cap - moved[i]).max(0.0), e.edge_inside)),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;
@@ -154,6 +160,10 @@ impl CollisionStage {
             );
             for &(c, x, v) in &self.scratch {
                 let i = c.vertex as usize;
+                // Whatever moved it counts against its lead-out's step (see `exit_moved`).
+                if let Some(m) = self.exit_moved.get_mut(i) {
+                    *m += (x - x1[i]).length();
+                }
                 x1[i] = x;
                 v1[i] = v;
                 self.in_contact[i] = true;

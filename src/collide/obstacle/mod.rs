@@ -18,5 +18,6 @@ mod query;
 mod shape;
 mod surface;
 
+pub(crate) use query::ON_SURFACE;
 pub(crate) use shape::Geom;
 pub use shape::{Obstacle, ObstacleError};

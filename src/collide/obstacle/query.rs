@@ -7,6 +7,13 @@ use super::surface::{SurfaceHit, SurfacePoint};
 use crate::Vec3;
 use parry3d::query::{PointProjection, Ray};
 
+/// Depth (m) below which a vertex lies on a solid's surface, not inside it: cloth laid exactly on
+/// a face (robot_cape's hem on drape_bot's base box, z = 0.4 - 0.3 against 0.05 + 0.05) lands a
+/// rounding error on either side, and every run of that scene warned of 5 vertices inside at
+/// "0.0 mm" and planned their way out. A micrometre: above the rounding of parry's f32 shapes
+/// (cylinders, meshes: about 1e-7 m at a metre), far below any cloth's thickness.
+pub(crate) const ON_SURFACE: f64 = 1e-6;
+
 /// A point this share of the thickness inside the layer is on its edge (where a push or the
 /// implicit filter left it), not in it.
 const LAYER_TOLERANCE: f64 = 1e-3;
@@ -145,13 +152,19 @@ impl Obstacle {
     }
 
     /// The outward normal and depth (`th` minus the distance) of local point `p` when it lies
-    /// outside a solid but inside its contact layer of thickness `th`; `None` when clear, inside,
-    /// or not a solid.
+    /// outside a solid (or on its surface, within [`ON_SURFACE`]) but inside its contact layer of
+    /// thickness `th`; `None` when clear, inside, or not a solid. On the surface counts: cloth
+    /// laid along drape_bot's closed fingers lies on both faces where they meet, and read as in
+    /// neither layer, it was left to the vertex pass, which pushed it out of one finger through
+    /// the other, 8 mm across the cloth in one pass.
     pub(crate) fn in_layer(&self, p: Vec3, th: f64) -> Option<(Vec3, f64)> {
-        if matches!(self.geom, Geom::Surface) || self.contains_local(p) {
+        if matches!(self.geom, Geom::Surface) {
             return None;
         }
         let sp = self.closest_local(p, p);
+        if self.contains_local(p) && -sp.signed_distance > ON_SURFACE {
+            return None;
+        }
         let gap = th - sp.signed_distance;
         (gap > th * LAYER_TOLERANCE).then_some((sp.normal, gap))
     }
@@ -179,8 +192,13 @@ impl Obstacle {
         // From beyond the bounding box back to `p`: the first crossing from outside.
         let reach = (self.local_max - self.local_min).length() + (p - self.local_min).length();
         let far = p + dir * (2.0 * reach + 1.0);
-        let hit = self.cast_local(far, p)?;
-        Some((hit.point - p).dot(dir).max(0.0))
+        // A ray from outside to a point inside crosses the surface; it is missed only by rounding
+        // at a point on the surface (depth 0). Read as "no way out", such a vertex on drape_bot's
+        // forearm fell to the nearest-face push: 8 mm in one pass, 1.4x its edge.
+        Some(
+            self.cast_local(far, p)
+                .map_or(0.0, |hit| (hit.point - p).dot(dir).max(0.0)),
+        )
     }
 
     /// First time the local segment `a -> b` crosses the surface from outside (t in [0, 1]).
@@ -321,5 +339,51 @@ mod tests {
             }
         }
         assert!(hits > 500);
+    }
+
+    /// A point on a solid's surface up to rounding (inside by nanometres, which parry's f32 ray
+    /// cannot resolve) has a way out of depth about 0, and is in the contact layer: cloth led out
+    /// of drape_bot's forearm fell to the nearest-face push when either read "none" (8 mm in one
+    /// pass), and cloth on the shared face of its closed fingers was pushed out of one through
+    /// the other.
+    #[test]
+    fn a_point_on_the_surface_has_a_way_out_and_a_layer() {
+        let obstacles = [
+            Obstacle::cuboid("b", Vec3::new(0.2, 0.05, 0.4), Pose::IDENTITY).unwrap(),
+            Obstacle::capsule("c", 0.04, 0.2, Pose::IDENTITY).unwrap(),
+            Obstacle::cylinder("y", 0.04, 0.2, Pose::IDENTITY).unwrap(),
+        ];
+        let th = 0.008;
+        let mut seed = 11u64;
+        for o in &obstacles {
+            let mut tested = 0;
+            for _ in 0..4000 {
+                let q = Vec3::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.5;
+                let sp = o.closest_local(q, q);
+                let depth = 10f64.powf(-12.0 + 6.0 * (rnd(&mut seed) + 1.0) / 2.0);
+                let p = sp.point - sp.normal * depth;
+                if !o.contains_local(p) {
+                    continue;
+                }
+                tested += 1;
+                let dir = (sp.normal
+                    + Vec3::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.3)
+                    .normalize();
+                let way = o.exit_along(p, dir);
+                assert!(
+                    way.is_some_and(|w| w < 1e-3),
+                    "{}: {p} inside by {depth:e}, way out along {dir}: {way:?}",
+                    o.name
+                );
+                if depth <= 0.1 * ON_SURFACE {
+                    assert!(
+                        o.in_layer(p, th).is_some(),
+                        "{}: {p} on the surface",
+                        o.name
+                    );
+                }
+            }
+            assert!(tested > 1000, "{}: {tested}", o.name);
+        }
     }
 }
