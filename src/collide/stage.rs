@@ -170,6 +170,12 @@ impl CollisionStage {
             .unwrap_or(cloth)
     }
 
+    /// Whether `vertex` is being led out of obstacle `obstacle` (it started inside it or in its
+    /// contact layer, see `overlap.rs`): its contact is the lead-out's, not a surface's.
+    pub fn leads_out(&self, vertex: usize, obstacle: usize) -> bool {
+        super::exit::exit_of(&self.exits, vertex, obstacle).is_some()
+    }
+
     /// Moves scripted obstacles over `[t0, t1]`: `pose_prev = pose_at(t0)`, `pose = pose_at(t1)`.
     /// External obstacles keep their last pose as `pose_prev` (call `set_obstacle_pose` after).
     pub fn advance_obstacles(&mut self, t0: f64, t1: f64) {

@@ -31,6 +31,14 @@ pub struct Constraints {
     /// solve linearises the springs there at that tension (see
     /// [`crate::effects::Effect::add_front_stiffness`]).
     pub front_strain: Vec<f64>,
+    /// Free vertices whose contact the collision stage released at the step's start (the force
+    /// on them pulls them off), to be held along the normal after all (at their
+    /// `target_velocity`) if the solve drives them into it, for integrators that release holds
+    /// within the step. Only cloth on its way out of a solid it started inside: the collision
+    /// stage leads it out a sixth of an edge a pass, so a solve that moves it back in is not
+    /// undone at once. Released at the start, the patch inside drape_bot's forearm was pulled
+    /// 16 mm back in by the solve (its springs, stretched by the patch's upward speed).
+    pub standby: Vec<(usize, Vec3)>,
 }
 
 impl Constraints {
@@ -41,6 +49,7 @@ impl Constraints {
             friction: Vec::new(),
             contacts: Vec::new(),
             front_strain: Vec::new(),
+            standby: Vec::new(),
         }
     }
 }

@@ -83,6 +83,7 @@ impl Coupling {
             self.constraints.filter.fill(Filter::Free);
         }
         self.constraints.friction.clear();
+        self.constraints.standby.clear();
         self.feedback.clear(n);
     }
 
@@ -308,19 +309,31 @@ impl Coupling {
         };
         s.effects.forces(&st, scratch);
         // The contacts grouped by vertex (in contact order within a vertex).
-        let mut contacts: Vec<(usize, Vec3, Vec3, usize)> = stage
+        let mut contacts: Vec<VertexContact> = stage
             .contacts()
             .iter()
-            .map(|c| (c.vertex as usize, c.normal, c.surface_velocity, c.obstacle))
-            .filter(|&(i, _, _, _)| i < n && self.constraints.filter[i] != Filter::Fixed)
+            .map(|c| VertexContact {
+                vertex: c.vertex as usize,
+                normal: c.normal,
+                surface: c.surface_velocity,
+                obstacle: c.obstacle,
+                led_out: stage.leads_out(c.vertex as usize, c.obstacle),
+            })
+            .filter(|c| c.vertex < n && self.constraints.filter[c.vertex] != Filter::Fixed)
             .collect();
-        contacts.sort_by_key(|c| c.0);
+        contacts.sort_by_key(|c| c.vertex);
         self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
         let mut friction = Vec::new();
-        for group in contacts.chunk_by(|a, b| a.0 == b.0) {
-            let i = group[0].0;
+        for group in contacts.chunk_by(|a, b| a.vertex == b.vertex) {
+            let i = group[0].vertex;
             let f = scratch[i];
             let Some(normals) = pressing_normals(group, f) else {
+                // Released, but on its way out of a solid: held again if the solve drives it
+                // back in (see `Constraints::standby`).
+                if let Some(c) = group.iter().find(|c| c.led_out) {
+                    self.constraints.target_velocity[i] = c.surface;
+                    self.constraints.standby.push((i, c.normal));
+                }
                 continue;
             };
             let (filter, target) = normals.filter();
@@ -328,7 +341,7 @@ impl Coupling {
             self.constraints.target_velocity[i] = target;
             let mu = group
                 .iter()
-                .map(|c| stage.friction_coefficient(i, c.3))
+                .map(|c| stage.friction_coefficient(i, c.obstacle))
                 .fold(0.0, f64::max);
             self.held.push((i, normals, mu));
             if solves_friction {
@@ -375,8 +388,19 @@ impl Coupling {
     }
 }
 
-/// The surfaces a vertex with the contacts `group` (vertex, normal, surface velocity, obstacle) is held
-/// against this substep, given the force `f` on it, or `None` when it is released from all.
+/// One contact of the last collision pass, as the filter sees it.
+struct VertexContact {
+    vertex: usize,
+    normal: Vec3,
+    /// The surface's velocity at the contact.
+    surface: Vec3,
+    obstacle: usize,
+    /// The lead-out's contact of a vertex that started inside the obstacle (`overlap.rs`).
+    led_out: bool,
+}
+
+/// The surfaces a vertex with the contacts `group` is held against this substep, given the
+/// force `f` on it, or `None` when it is released from all.
 ///
 /// A contact whose surface the force pulls the vertex off is released, but not alone: the
 /// surfaces still held steer the vertex. In a wedge (cloth pressed by a moving slanted face
@@ -385,15 +409,15 @@ impl Coupling {
 /// solver drove it 9 mm through it in one substep and the collision stage's push back stored
 /// 0.7 J in the springs. So a released contact is taken back while the held ones' filtered
 /// force, or their surfaces' velocities, drive the vertex into its surface.
-fn pressing_normals(group: &[(usize, Vec3, Vec3, usize)], f: Vec3) -> Option<HeldNormals> {
-    let mut held: Vec<bool> = group.iter().map(|c| f.dot(c.1) <= 0.0).collect();
+fn pressing_normals(group: &[VertexContact], f: Vec3) -> Option<HeldNormals> {
+    let mut held: Vec<bool> = group.iter().map(|c| f.dot(c.normal) <= 0.0).collect();
     let build = |held: &[bool]| {
         HeldNormals::from_contacts(
             group
                 .iter()
                 .zip(held)
                 .filter(|(_, h)| **h)
-                .map(|(c, _)| (c.1, c.2)),
+                .map(|(c, _)| (c.normal, c.surface)),
         )
     };
     let mut normals = build(&held);
@@ -407,7 +431,7 @@ fn pressing_normals(group: &[(usize, Vec3, Vec3, usize)], f: Vec3) -> Option<Hel
         let driven = target - filter.apply(target);
         let mut added = false;
         for (c, h) in group.iter().zip(held.iter_mut()) {
-            if !*h && (f_free.dot(c.1) < 0.0 || (driven - c.2).dot(c.1) < 0.0) {
+            if !*h && (f_free.dot(c.normal) < 0.0 || (driven - c.surface).dot(c.normal) < 0.0) {
                 *h = true;
                 added = true;
             }

@@ -27,8 +27,8 @@ impl Implicit {
 
     /// Releases the vertices held against one surface whose constraint impulse (just computed by
     /// `linear_impulses`) pulls them into it, and holds again released ones the solve then
-    /// moves into it: the filter is bilateral, a contact can only push (an active set, like the
-    /// springs'). The collision stage decides from the start-of-step forces which contacts to
+    /// moves into it (with those standing by from the step's start, `Constraints::standby`):
+    /// the filter is bilateral, a contact can only push (an active set, like the springs'). The collision stage decides from the start-of-step forces which contacts to
     /// hold; a vertex next to an obstacle edge is lifted by the edge's spring within the solve,
     /// and held down it glued the lever a strip bent over the edge rests on. Returns whether
     /// any changed.
@@ -109,6 +109,51 @@ mod tests {
             } else {
                 assert_eq!(v[1].z, 0.0, "pressed vertex left the surface: v {:?}", v[1]);
                 assert!(impulse.z > 0.0, "the surface must push: {impulse:?}");
+            }
+        }
+    }
+
+    /// A free vertex standing by at a surface (normal +z; cloth on its way out of a solid whose
+    /// contact the coupling released) is held after all when the solve drives it into the
+    /// surface, and left free when it moves off. Without the standby the pressed vertex goes in.
+    #[test]
+    fn a_vertex_standing_by_is_held_only_when_the_solve_drives_it_in() {
+        use crate::cloth::topology::Spring;
+        use crate::effects::Springs;
+        use crate::integrate::Constraints;
+        for (rest, pressed) in [(0.05, false), (0.2, true)] {
+            for standby in [false, true] {
+                let mut effects = EffectSet::new();
+                effects.push(Box::new(Springs::new(
+                    "stretch",
+                    vec![Spring { i: 0, j: 1, rest }],
+                    vec![100.0],
+                    "k".into(),
+                )));
+                let mass = [1e-3, 1e-3];
+                let mut constraints = Constraints::free(2);
+                constraints.filter[0] = Filter::Fixed;
+                if standby {
+                    constraints.standby.push((1, Vec3::Z));
+                }
+                let d = Dynamics {
+                    effects: &effects,
+                    mass: &mass,
+                    constraints: &constraints,
+                    nominal_step: 0.0,
+                };
+                let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
+                let mut v = [Vec3::ZERO; 2];
+                let mut solver = Implicit::new(ImplicitSettings::default());
+                solver.prepare(&effects, 2);
+                let mut report = StepReport::default();
+                solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v, &mut report);
+                let what = format!("rest {rest}, standby {standby}: v {:?}", v[1]);
+                match (pressed, standby) {
+                    (true, true) => assert!(v[1].z.abs() < 1e-9, "{what}"),
+                    (true, false) => assert!(v[1].z < -0.1, "{what}"),
+                    (false, _) => assert!(v[1].z > 0.1, "{what}"),
+                }
             }
         }
     }

@@ -51,6 +51,10 @@ impl Implicit {
         let mut filter = std::mem::take(&mut self.filter);
         filter.clone_from(&d.constraints.filter);
         self.released.clear();
+        self.released.extend(
+            (d.constraints.standby.iter().copied())
+                .filter(|&(i, _)| i < n && filter[i] == Filter::Free),
+        );
         let filt = &mut filter;
         self.assemble(d, &State { t, x, v }, h);
         // Constrained components of dv are fixed: z = (I - S)(v_target - v).
@@ -65,7 +69,8 @@ impl Implicit {
         std::mem::swap(&mut self.older, &mut self.last);
         let mut cg_iterations = stats.iterations;
         // Contact holds to settle (their impulses cost a product with the matrix).
-        let holds = filt.iter().any(|f| matches!(f, Filter::Direction(_)));
+        let holds =
+            !self.released.is_empty() || filt.iter().any(|f| matches!(f, Filter::Direction(_)));
         let mut impulses_current = false;
         for _ in 0..MAX_REFITS {
             let drags = self.refit_drags(v, h);
