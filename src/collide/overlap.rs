@@ -10,7 +10,7 @@
 //! 7952 times in 2 s. A patch leaves the way it came in: along the mean outward normal where
 //! its mesh edges cross the surface to the cloth outside.
 
-use super::exit::Exit;
+use super::exit::{slip_around, Exit};
 use super::features::FeatureCollider;
 use super::obstacle::{Obstacle, ON_SURFACE};
 use super::ring::one_ring;
@@ -261,6 +261,7 @@ impl CollisionStage {
             }
         }
         self.exits.sort_unstable_by_key(|e| (e.vertex, e.obstacle));
+        slip_around(&self.exits, &self.exit_neighbours, &mut self.exit_slip);
     }
 
     /// Drops the exits of vertices that are out of the solid and of its contact layer along
@@ -308,6 +309,7 @@ impl CollisionStage {
             e.edge_inside = cuts;
             waits || cuts
         });
+        slip_around(&self.exits, &self.exit_neighbours, &mut self.exit_slip);
     }
 
     /// The obstacles that vertices `x` are inside (at the obstacles' current poses), with their

@@ -62,6 +62,7 @@ impl CollisionStage {
             friction_solved: feedback.friction_solved_all(),
             sprung: feedback.sprung(),
             exits: &self.exits,
+            slip: &self.exit_slip,
         };
         self.feature_contacts.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);

@@ -55,6 +55,11 @@ pub struct CollisionStage {
     /// inside two solids (where the upper arm meets the forearm) follows both plans, and the
     /// two share one step.
     pub(super) exit_moved: Vec<f64>,
+    /// (vertex, obstacle) pairs without friction while a patch leaves that obstacle: its
+    /// exiting vertices and their mesh neighbours, sorted (see [`exit::slip_around`]).
+    ///
+    /// [`exit::slip_around`]: super::exit::slip_around
+    pub(super) exit_slip: Vec<(u32, u32)>,
 }
 
 impl CollisionStage {
@@ -123,6 +128,7 @@ impl CollisionStage {
             exits: Vec::new(),
             exit_neighbours: Vec::new(),
             exit_moved: Vec::new(),
+            exit_slip: Vec::new(),
         })
     }
 
@@ -161,8 +167,11 @@ impl CollisionStage {
     }
 
     /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the
-    /// cloth's).
+    /// cloth's; 0 beside a lead-out from that obstacle, see [`super::exit::slip_around`]).
     pub fn friction_coefficient(&self, vertex: usize, obstacle: usize) -> f64 {
+        if super::exit::slips(&self.exit_slip, vertex, obstacle) {
+            return 0.0;
+        }
         let cloth = self.friction.get(vertex).copied().unwrap_or(0.0);
         self.obstacles
             .get(obstacle)

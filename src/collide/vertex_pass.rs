@@ -2,7 +2,7 @@
 //! box against every near obstacle, answered by [`super::respond::obstacle_vertex`].
 
 use super::broad::Aabb;
-use super::exit::exit_of;
+use super::exit::{exit_of, slips};
 use super::feedback::SolverFeedback;
 use super::respond::{obstacle_vertex, VertexInput};
 use super::stage::CollisionStage;
@@ -109,6 +109,7 @@ impl CollisionStage {
             let ob = Aabb { lo: olo, hi: ohi };
             let friction = &self.friction;
             let exits = &self.exits;
+            let slip = &self.exit_slip;
             let moved = &self.exit_moved;
             let boxes = &self.vertex_boxes;
             // Skipped vertices carry the empty box, which an unbounded box would still "overlap".
@@ -141,7 +142,11 @@ impl CollisionStage {
                             vertex: i as u32,
                             x0: x0[i],
                             thickness: thickness[i],
-                            friction: o.friction.unwrap_or(friction[i]),
+                            friction: if slips(slip, i, oi) {
+                                0.0
+                            } else {
+                                o.friction.unwrap_or(friction[i])
+                            },
                             h,
                             mode,
                             response,

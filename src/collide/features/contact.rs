@@ -33,6 +33,8 @@ pub(crate) struct ClothState<'a> {
     /// skip their faces and edges, which cross the obstacle by construction (the arm's rod axes
     /// and box edges pushed those patches out sideways at once, 3.5x rest).
     pub exits: &'a [Exit],
+    /// (vertex, obstacle) pairs without friction beside a lead-out (`exit::slip_around`).
+    pub slip: &'a [(u32, u32)],
 }
 
 /// A contact of an obstacle's edge, corner or rod axis with the cloth, for the implicit solver

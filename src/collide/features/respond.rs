@@ -3,6 +3,7 @@
 //! Coulomb friction.
 
 use super::contact::{ClothState, FeatureContact, Hit, DEEP};
+use crate::collide::exit::slips;
 use crate::collide::obstacle::Obstacle;
 use crate::Vec3;
 
@@ -40,9 +41,13 @@ pub(super) fn respond(
     };
     let c: Vec3 = (0..3).map(|k| x1[idx[k]] * hit.w[k]).sum();
     let gap = n.dot(c - f_end);
-    let mu = o
-        .friction
-        .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>());
+    let beside_lead_out = (0..3).any(|k| hit.w[k] > 0.0 && slips(s.slip, idx[k], obstacle));
+    let mu = if beside_lead_out {
+        0.0
+    } else {
+        o.friction
+            .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>())
+    };
     // Every feature contact is handed to the solver (a moving obstacle's too: answered only
     // here, by position after the solve, the cloth it carries lagged a whole substep of its
     // motion behind it every substep, and that push was a strain the solver never saw).
