@@ -103,10 +103,12 @@ const EXPECTED: &[(&str, u64)] = &[
     // contact distance of a triangle's plane but not of the triangle (`proximity.rs`).
     // chair16_edges re-recorded when an obstacle edge's contact closest at its end (a box
     // corner) took the separation as its normal, not the two edges' plane normal (`ccd.rs`).
-    ("crumple16_self", 0xfb1c565cea14e04c),
-    ("crumple64_near", 0x68199d84d6ac19c7),
-    ("chair16_edges", 0xcb72e94012c90d27),
-    ("pick12_robot", 0x393e8f21941eee06),
+    // All four re-recorded when a step's active-set rounds came to be solved to 1e-2 first,
+    // then polished to the scene's tolerance (`integrate/implicit/step.rs`).
+    ("crumple16_self", 0x511f7162970c3669),
+    ("crumple64_near", 0xe0fd80696920898c),
+    ("chair16_edges", 0x116cacf46a950e77),
+    ("pick12_robot", 0xf2e3984837288b00),
     ("sphere16_projection", 0xfadc50a365b3a77e),
 ];
 

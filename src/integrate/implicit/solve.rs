@@ -25,8 +25,8 @@ impl Implicit {
     /// ms but S1 64x64, whose splits land the cloth on the ball, from 108 to 247 CG iterations
     /// per frame (171 for quarter steps and shorter); the last full step's coarse levels as
     /// they were, 81 ms.
-    pub(super) fn solve(&mut self, filt: &[Filter], history: bool) -> SolveStats {
-        let (tol, max_it) = (self.settings.cg_tolerance, self.settings.cg_max_iterations);
+    pub(super) fn solve(&mut self, filt: &[Filter], history: bool, tol: f64) -> SolveStats {
+        let max_it = self.settings.cg_max_iterations;
         let short = self.short_step;
         if history && !short {
             if let Some(h) = self.hierarchy.as_mut() {
