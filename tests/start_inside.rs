@@ -299,7 +299,7 @@ fn an_arm_lying_in_a_cloth_leaves_it_without_tearing() {
 /// At 60 x 60 with the scene's friction (0.5): a vertex beside the forearm, pulled into it by
 /// its neighbour rising out of it, was pushed back each substep, and its friction (a half of
 /// that push) held it while the neighbour rose, like a rope round a capstan: their edge reached
-/// 1.42x rest at t = 0.1 s (1.24x without friction; 1.25x now). Cloth beside a lead-out now slides on the
+/// 1.42x rest at t = 0.1 s (1.24x without friction; 1.24x now). Cloth beside a lead-out now slides on the
 /// solid it leaves without friction (`exit::slip_around`). A finer cloth takes longer to
 /// leave: a sixth of its shorter edge a substep at the least (two substeps a frame), along a
 /// way out no longer than the largest link radius (the cloth lies through the arm's axis; the
