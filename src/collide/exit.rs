@@ -66,3 +66,35 @@ pub(crate) fn slips(slip: &[(u32, u32)], vertex: usize, obstacle: usize) -> bool
             .binary_search(&(vertex as u32, obstacle as u32))
             .is_ok()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn exit(vertex: u32, obstacle: u32, first: u32, count: u32) -> Exit {
+        Exit {
+            vertex,
+            obstacle,
+            dir: Vec3::Z,
+            cap: 1e-3,
+            edge_inside: false,
+            first,
+            count,
+        }
+    }
+
+    /// A row 0-1-2-3 with 1 and 2 leaving obstacle 0 and 2 also obstacle 1: their neighbours
+    /// that stay (0 and 3 for obstacle 0; 1 and 3 for obstacle 1, where 1 is not leaving)
+    /// slide, each pair once; the leaving vertices keep their friction on what they leave.
+    #[test]
+    fn the_neighbours_that_stay_slide_and_the_leaving_vertices_do_not() {
+        let neighbours = [0, 2, 1, 3];
+        let exits = [exit(1, 0, 0, 2), exit(2, 0, 2, 2), exit(2, 1, 2, 2)];
+        let mut slip = Vec::new();
+        slip_around(&exits, &neighbours, &mut slip);
+        assert_eq!(slip, vec![(0, 0), (1, 1), (3, 0), (3, 1)]);
+        assert!(slips(&slip, 3, 1) && !slips(&slip, 2, 0) && !slips(&slip, 1, 0));
+        slip_around(&[], &neighbours, &mut slip);
+        assert!(slip.is_empty() && !slips(&slip, 0, 0));
+    }
+}
