@@ -65,49 +65,58 @@ impl Implicit {
 mod tests {
     use super::*;
     use crate::effects::EffectSet;
-    use crate::integrate::{ImplicitSettings, Integrator, StepReport};
+    use crate::integrate::{Constraints, ImplicitSettings, Integrator, StepReport};
+
+    /// One implicit step of vertex 1 at the origin on a spring of rest length `rest` to a fixed
+    /// vertex 0.1 m above it (pulled up when `rest` is shorter, pressed down when longer), with
+    /// `constraints` set up for vertex 1 by `hold`; returns its velocity and constraint impulse.
+    fn step_under_spring(rest: f64, hold: impl Fn(&mut Constraints)) -> (Vec3, Vec3) {
+        use crate::cloth::topology::Spring;
+        use crate::effects::Springs;
+        let mut effects = EffectSet::new();
+        effects.push(Box::new(Springs::new(
+            "stretch",
+            vec![Spring { i: 0, j: 1, rest }],
+            vec![100.0],
+            "k".into(),
+        )));
+        let mass = [1e-3, 1e-3];
+        let mut constraints = Constraints::free(2);
+        constraints.filter[0] = Filter::Fixed;
+        hold(&mut constraints);
+        let d = Dynamics {
+            effects: &effects,
+            mass: &mass,
+            constraints: &constraints,
+            nominal_step: 0.0,
+        };
+        let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
+        let mut v = [Vec3::ZERO; 2];
+        let mut solver = Implicit::new(ImplicitSettings::default());
+        solver.prepare(&effects, 2);
+        let mut report = StepReport::default();
+        solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v, &mut report);
+        let impulse = report.impulses().map_or(Vec3::ZERO, |r| r[1]);
+        (v[1], impulse)
+    }
+
     /// A vertex held on a surface (normal +z) by the filter, pulled off it or pressed into it by a
     /// spring to a fixed vertex above: the filter is bilateral, the contact is not. Pulled, the
     /// step releases it (it moves up, no impulse); pressed, it stays held with a pushing impulse.
     #[test]
     fn holds_are_released_only_when_they_would_pull() {
-        use crate::cloth::topology::Spring;
-        use crate::effects::Springs;
-        use crate::integrate::Constraints;
         for (rest, pulled) in [(0.05, true), (0.2, false)] {
-            let mut effects = EffectSet::new();
-            effects.push(Box::new(Springs::new(
-                "stretch",
-                vec![Spring { i: 0, j: 1, rest }],
-                vec![100.0],
-                "k".into(),
-            )));
-            let mass = [1e-3, 1e-3];
-            let mut constraints = Constraints::free(2);
-            constraints.filter[0] = Filter::Fixed;
-            constraints.filter[1] = Filter::Direction(Vec3::Z);
-            let d = Dynamics {
-                effects: &effects,
-                mass: &mass,
-                constraints: &constraints,
-                nominal_step: 0.0,
-            };
-            let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
-            let mut v = [Vec3::ZERO; 2];
-            let mut solver = Implicit::new(ImplicitSettings::default());
-            solver.prepare(&effects, 2);
-            let mut report = StepReport::default();
-            solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v, &mut report);
-            let impulse = report.impulses().map_or(Vec3::ZERO, |r| r[1]);
+            let (v, impulse) =
+                step_under_spring(rest, |c| c.filter[1] = Filter::Direction(Vec3::Z));
             if pulled {
-                assert!(v[1].z > 0.0, "pulled vertex stayed held: v {:?}", v[1]);
+                assert!(v.z > 0.0, "pulled vertex stayed held: v {v:?}");
                 assert_eq!(
                     impulse,
                     Vec3::ZERO,
                     "a released vertex has no constraint impulse"
                 );
             } else {
-                assert_eq!(v[1].z, 0.0, "pressed vertex left the surface: v {:?}", v[1]);
+                assert_eq!(v.z, 0.0, "pressed vertex left the surface: v {v:?}");
                 assert!(impulse.z > 0.0, "the surface must push: {impulse:?}");
             }
         }
@@ -118,41 +127,18 @@ mod tests {
     /// surface, and left free when it moves off. Without the standby the pressed vertex goes in.
     #[test]
     fn a_vertex_standing_by_is_held_only_when_the_solve_drives_it_in() {
-        use crate::cloth::topology::Spring;
-        use crate::effects::Springs;
-        use crate::integrate::Constraints;
         for (rest, pressed) in [(0.05, false), (0.2, true)] {
             for standby in [false, true] {
-                let mut effects = EffectSet::new();
-                effects.push(Box::new(Springs::new(
-                    "stretch",
-                    vec![Spring { i: 0, j: 1, rest }],
-                    vec![100.0],
-                    "k".into(),
-                )));
-                let mass = [1e-3, 1e-3];
-                let mut constraints = Constraints::free(2);
-                constraints.filter[0] = Filter::Fixed;
-                if standby {
-                    constraints.standby.push((1, Vec3::Z));
-                }
-                let d = Dynamics {
-                    effects: &effects,
-                    mass: &mass,
-                    constraints: &constraints,
-                    nominal_step: 0.0,
-                };
-                let mut x = [Vec3::new(0.0, 0.0, 0.1), Vec3::ZERO];
-                let mut v = [Vec3::ZERO; 2];
-                let mut solver = Implicit::new(ImplicitSettings::default());
-                solver.prepare(&effects, 2);
-                let mut report = StepReport::default();
-                solver.step(&d, 0.0, 1.0 / 120.0, &mut x, &mut v, &mut report);
-                let what = format!("rest {rest}, standby {standby}: v {:?}", v[1]);
+                let (v, _) = step_under_spring(rest, |c| {
+                    if standby {
+                        c.standby.push((1, Vec3::Z));
+                    }
+                });
+                let what = format!("rest {rest}, standby {standby}: v {v:?}");
                 match (pressed, standby) {
-                    (true, true) => assert!(v[1].z.abs() < 1e-9, "{what}"),
-                    (true, false) => assert!(v[1].z < -0.1, "{what}"),
-                    (false, _) => assert!(v[1].z > 0.1, "{what}"),
+                    (true, true) => assert!(v.z.abs() < 1e-9, "{what}"),
+                    (true, false) => assert!(v.z < -0.1, "{what}"),
+                    (false, _) => assert!(v.z > 0.1, "{what}"),
                 }
             }
         }
