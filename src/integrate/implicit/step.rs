@@ -100,30 +100,23 @@ impl Implicit {
         let mut impulses_current = false;
         let mut rounds = 0;
         loop {
+            let mut changed = false;
             if rounds < MAX_REFITS {
-                let (changed, impulses) =
-                    self.refit_active_sets(filt, d, &State { t, x, v }, h, holds);
-                impulses_current |= impulses;
-                if changed {
-                    rounds += 1;
-                    stats = self.solve(filt, false, tol);
-                    tally(report, &stats);
-                    cg_iterations += stats.iterations;
-                    impulses_current = false;
-                    continue;
-                }
+                let (c, impulses) = self.refit_active_sets(filt, d, &State { t, x, v }, h, holds);
+                (changed, impulses_current) = (c, impulses_current || impulses);
             }
-            if tol > tight {
+            if changed {
+                rounds += 1;
+            } else if tol > tight {
                 // The polish, then the rounds again on its answer.
-                tol = tight;
-                rounds = 0;
-                stats = self.solve(filt, false, tight);
-                tally(report, &stats);
-                cg_iterations += stats.iterations;
-                impulses_current = false;
-                continue;
+                (tol, rounds) = (tight, 0);
+            } else {
+                break;
             }
-            break;
+            stats = self.solve(filt, false, tol);
+            tally(report, &stats);
+            cg_iterations += stats.iterations;
+            impulses_current = false;
         }
         if !impulses_current {
             self.linear_impulses(filt);
