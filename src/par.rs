@@ -1,9 +1,12 @@
 //! Infrastructure: a two-way fork-join for the step's passes over large cloths, on one helper
 //! thread that spins between jobs, and the fixed split of a pass into halves. The force terms
-//! (`effects`) and the integrators (`integrate`) both split their passes here.
+//! (`effects`), the integrators and the implicit solve's products and multigrid sweeps
+//! (`integrate`) all split their passes here.
 //!
 //! Why not `rayon::join`: called from outside the pool (the simulation's own thread), each join
-//! hands the work to a pool thread and puts the caller to sleep until it is done. On this 2-vCPU
+//! hands the work to a pool thread and puts the caller to sleep until it is done; from inside
+//! the pool, a join whose other worker went to sleep wakes it (a PCG iteration forks a dozen
+//! times: at 64x64 rayon's two threads solved no faster than one). On this 2-vCPU
 //! virtual machine a sleeping thread's wake-up costs ~4 us when the other vCPU is busy and
 //! ~35 us or more when it idles (the hypervisor must wake a halted vCPU); an explicit substep
 //! joins twice, so on an idle machine the wake-ups cost more than the work. Here the caller runs

@@ -4,7 +4,6 @@
 //! assembling a step only overwrites values; no allocation happens per step.
 
 use crate::{Mat3, Vec3};
-use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
@@ -13,8 +12,6 @@ static NEXT_PATTERN: AtomicU64 = AtomicU64::new(1);
 
 /// Rows this large or larger are multiplied in parallel.
 const PAR_ROWS: usize = 2048;
-/// Rows per parallel task of a large product.
-const PAR_CHUNK: usize = 512;
 
 /// Collects the vertex pairs a set of effects couples.
 #[derive(Debug, Default, Clone)]
@@ -242,9 +239,9 @@ impl BlockCsr {
             }
         };
         if y.len() >= PAR_ROWS {
-            y.par_chunks_mut(PAR_CHUNK)
-                .enumerate()
-                .for_each(|(c, yc)| rows(c * PAR_CHUNK, yc));
+            let mid = y.len() / 2;
+            let (ya, yb) = y.split_at_mut(mid);
+            crate::par::join(|| rows(0, ya), || rows(mid, yb));
         } else {
             rows(0, y);
         }

@@ -139,10 +139,11 @@ impl Integrator for Implicit {
         self.loads.clear();
     }
 
-    /// Runs the step on a thread of rayon's pool: its parallel products and sweeps then fork
-    /// and join from inside the pool, where a join costs a deque push, instead of from the
-    /// caller's thread, where each join is a cross-thread wake-up (4-35 us on the 2-core test
-    /// machine, dozens per step; ~20 % of a 64x64 step was the scheduler's).
+    /// Runs the step on the caller's thread; its products, filter pass, Galerkin products and
+    /// sweeps fork on [`crate::par`]'s spinning helper. On rayon's pool (the step inside a
+    /// `rayon::scope`) the forks woke sleeping workers, dozens of times per PCG iteration: at
+    /// 64x64 two threads solved no faster than one (S1's CG 38.5 and 38.8 ms a frame), and 0.73x
+    /// of that on the helper.
     fn step(
         &mut self,
         d: &Dynamics,
@@ -153,7 +154,7 @@ impl Integrator for Implicit {
         report: &mut StepReport,
     ) {
         std::mem::swap(&mut self.impulses, &mut report.constraint_impulses);
-        rayon::scope(|_| self.step_in_pool(d, t, h, x, v, report));
+        self.step_in_pool(d, t, h, x, v, report);
         std::mem::swap(&mut self.impulses, &mut report.constraint_impulses);
     }
 }

@@ -6,7 +6,6 @@ use super::error::MultigridError;
 use crate::linalg::{BlockCsr, Filter};
 use crate::Mat3;
 use glam::{Mat3A as M3, Vec3A as V3};
-use rayon::prelude::*;
 
 /// Matrices with this many rows or more are filtered in two parallel halves.
 const PAR_FILTER_ROWS: usize = 2048;
@@ -80,7 +79,7 @@ impl Csr {
         spill.vals.clear();
         spill.ends.clear();
         spill.ends.push(0);
-        rayon::join(
+        crate::par::join(
             || {
                 filter_rows(
                     a,
@@ -144,10 +143,9 @@ impl Csr {
         // Parallel by work, not rows: the restriction `P^T` has few rows but the fine level's
         // blocks.
         if self.cols.len() >= PAR_BLOCKS && y.len() >= 64 {
-            let chunk = y.len().div_ceil(8).max(32);
-            y.par_chunks_mut(chunk)
-                .enumerate()
-                .for_each(|(c, yc)| rows(c * chunk, yc));
+            let mid = self.work_split();
+            let (ya, yb) = y.split_at_mut(mid);
+            crate::par::join(|| rows(0, ya), || rows(mid, yb));
         } else {
             rows(0, y);
         }
@@ -233,43 +231,18 @@ impl Csr {
         }
     }
 
-    /// `self * other` (Gustavson), `other` having `ncols` block columns.
+    /// `self * other` (Gustavson), `other` having `ncols` block columns; large products in two
+    /// halves by work (each row's result does not depend on the split).
     pub(super) fn matmul(&self, other: &Csr, ncols: usize) -> Csr {
         let rows = self.rows();
-        let chunk = rows
-            .div_ceil(rayon::current_num_threads().max(1) * 4)
-            .max(64);
-        let parts: Vec<(Vec<usize>, Vec<u32>, Vec<M3>)> = (0..rows)
-            .step_by(chunk)
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|start| {
-                let end = (start + chunk).min(rows);
-                let mut marker = vec![usize::MAX; ncols];
-                let mut lens = Vec::with_capacity(end - start);
-                let mut cols = Vec::new();
-                let mut vals: Vec<M3> = Vec::new();
-                for r in start..end {
-                    let row_begin = cols.len();
-                    let (ac, av) = self.row(r);
-                    for (&k, &a) in ac.iter().zip(av) {
-                        let (bc, bv) = other.row(k as usize);
-                        for (&j, &b) in bc.iter().zip(bv) {
-                            let slot = marker[j as usize];
-                            if slot != usize::MAX && slot >= row_begin {
-                                vals[slot] += a * b;
-                            } else {
-                                marker[j as usize] = cols.len();
-                                cols.push(j);
-                                vals.push(a * b);
-                            }
-                        }
-                    }
-                    lens.push(cols.len() - row_begin);
-                }
-                (lens, cols, vals)
-            })
-            .collect();
+        let part = |range: std::ops::Range<usize>| self.matmul_rows(other, ncols, range);
+        let parts = if self.cols.len() >= PAR_BLOCKS {
+            let mid = self.work_split();
+            let (a, b) = crate::par::join(|| part(0..mid), || part(mid..rows));
+            vec![a, b]
+        } else {
+            vec![part(0..rows)]
+        };
         let mut out = Csr {
             row_start: Vec::with_capacity(rows + 1),
             cols: Vec::new(),
@@ -288,6 +261,46 @@ impl Csr {
             out.vals.extend(vals);
         }
         out
+    }
+
+    /// Rows `range` of `self * other`: each row's length, columns and blocks.
+    fn matmul_rows(
+        &self,
+        other: &Csr,
+        ncols: usize,
+        range: std::ops::Range<usize>,
+    ) -> (Vec<usize>, Vec<u32>, Vec<M3>) {
+        let mut marker = vec![usize::MAX; ncols];
+        let mut lens = Vec::with_capacity(range.len());
+        let mut cols = Vec::new();
+        let mut vals: Vec<M3> = Vec::new();
+        for r in range {
+            let row_begin = cols.len();
+            let (ac, av) = self.row(r);
+            for (&k, &a) in ac.iter().zip(av) {
+                let (bc, bv) = other.row(k as usize);
+                for (&j, &b) in bc.iter().zip(bv) {
+                    let slot = marker[j as usize];
+                    if slot != usize::MAX && slot >= row_begin {
+                        vals[slot] += a * b;
+                    } else {
+                        marker[j as usize] = cols.len();
+                        cols.push(j);
+                        vals.push(a * b);
+                    }
+                }
+            }
+            lens.push(cols.len() - row_begin);
+        }
+        (lens, cols, vals)
+    }
+
+    /// The row that splits this matrix's blocks in two near-equal halves.
+    fn work_split(&self) -> usize {
+        let half = self.cols.len() / 2;
+        self.row_start
+            .partition_point(|&s| s < half)
+            .min(self.rows())
     }
 }
 

@@ -136,7 +136,7 @@ impl Level {
             None => sweep(0..n, None, x),
             Some(h) => {
                 let (xa, xb) = x.split_at_mut(h.mid);
-                rayon::join(
+                crate::par::join(
                     || sweep(0..h.mid, None, xa),
                     || sweep(h.mid..n, Some(&h.split), xb),
                 );
@@ -180,7 +180,7 @@ impl Level {
                 x[i - offset] += dinv[i] * r;
             }
         };
-        rayon::join(|| sweep(0..mid, xa), || sweep(mid..n, xb));
+        crate::par::join(|| sweep(0..mid, xa), || sweep(mid..n, xb));
     }
 }
 
@@ -217,7 +217,7 @@ impl Level {
             None => rows(0, r, None),
             Some(h) => {
                 let (ra, rb) = r.split_at_mut(h.mid);
-                rayon::join(|| rows(0, ra, None), || rows(h.mid, rb, Some(&h.split)));
+                crate::par::join(|| rows(0, ra, None), || rows(h.mid, rb, Some(&h.split)));
             }
         }
     }

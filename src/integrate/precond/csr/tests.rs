@@ -51,6 +51,55 @@ fn parallel_filtering_is_the_serial_one() {
     assert!(par.cols.len() < a.nnz_blocks(), "some blocks lumped");
 }
 
+/// A product and a Galerkin factor large enough to be split in two halves by work are the
+/// single-pass ones, block for block: each row's result does not depend on the split.
+#[test]
+fn split_products_are_the_serial_ones() {
+    let n = 3000usize;
+    let mut a = Csr {
+        row_start: vec![0],
+        ncols: n,
+        ..Csr::default()
+    };
+    for i in 0..n {
+        // Uneven rows, so that the split by work is not the split by rows.
+        let width = 2 + (i * 7) % 11;
+        for d in 0..width {
+            let j = (i + d * 37) % n;
+            let t = (i * 13 + d) as f32 * 0.1;
+            a.cols.push(j as u32);
+            a.vals.push(M3::from_cols(
+                V3::new(t.sin(), 0.5, t.cos()),
+                V3::new(0.25, t.cos(), 1.0),
+                V3::new(t, -0.5, 0.75),
+            ));
+        }
+        a.row_start.push(a.cols.len());
+    }
+    assert!(a.cols.len() >= PAR_BLOCKS, "large enough to be split");
+    let x: Vec<V3> = (0..n)
+        .map(|i| V3::new((i as f32).sin(), 1.0, (i % 5) as f32))
+        .collect();
+    let mut split = vec![V3::ZERO; n];
+    a.mul(&x, &mut split);
+    let serial: Vec<V3> = (0..n)
+        // SAFETY: `x` has `n = ncols` entries.
+        .map(|r| unsafe { a.row_times(r, &x) })
+        .collect();
+    assert_eq!(split, serial);
+    let product = a.matmul(&a, n);
+    let (lens, cols, vals) = a.matmul_rows(&a, n, 0..n);
+    let ends: Vec<usize> = std::iter::once(0)
+        .chain(lens.iter().scan(0, |e, l| {
+            *e += l;
+            Some(*e)
+        }))
+        .collect();
+    assert_eq!(product.row_start, ends);
+    assert_eq!(product.cols, cols);
+    assert_eq!(product.vals, vals);
+}
+
 /// A chain 0-1-2 with stiff springs (negative blocks) and a weak positive distance-2 block
 /// (bending-like), plus a weak negative one 0-3: only the weak positive block is lumped, the
 /// matrix keeps its action on translations, and stays SPD (Cholesky of the dense copy).
