@@ -207,6 +207,60 @@ where
     }
 }
 
+/// Slices (and tuples of slices) cut at an index: what [`sum_in_halves`] hands each half.
+pub(crate) trait Halve: Sized {
+    fn halve(self, mid: usize) -> (Self, Self);
+}
+
+impl<T> Halve for &[T] {
+    fn halve(self, mid: usize) -> (Self, Self) {
+        self.split_at(mid)
+    }
+}
+
+impl<T> Halve for &mut [T] {
+    fn halve(self, mid: usize) -> (Self, Self) {
+        self.split_at_mut(mid)
+    }
+}
+
+impl<A: Halve, B: Halve> Halve for (A, B) {
+    fn halve(self, mid: usize) -> (Self, Self) {
+        let ((a0, a1), (b0, b1)) = (self.0.halve(mid), self.1.halve(mid));
+        ((a0, b0), (a1, b1))
+    }
+}
+
+impl<A: Halve, B: Halve, C: Halve> Halve for (A, B, C) {
+    fn halve(self, mid: usize) -> (Self, Self) {
+        let ((a0, a1), (b0, b1)) = (self.0.halve(mid), (self.1, self.2).halve(mid));
+        ((a0, b0.0, b0.1), (a1, b1.0, b1.1))
+    }
+}
+
+impl<A: Halve, B: Halve, C: Halve, D: Halve> Halve for (A, B, C, D) {
+    fn halve(self, mid: usize) -> (Self, Self) {
+        let ((a0, a1), (b0, b1)) = ((self.0, self.1).halve(mid), (self.2, self.3).halve(mid));
+        ((a0.0, a0.1, b0.0, b0.1), (a1.0, a1.1, b1.0, b1.1))
+    }
+}
+
+/// `pass` over `data`, `n` rows long: in two halves on two threads from [`PAR_VERTICES`] rows
+/// on, one pass below; returns the halves' results added (the first half's plus the second's),
+/// so a sum depends on `n` only, never on which thread ran what.
+pub(crate) fn sum_in_halves<D: Halve + Send>(
+    n: usize,
+    data: D,
+    pass: impl Fn(D) -> f64 + Sync,
+) -> f64 {
+    if n < PAR_VERTICES {
+        return pass(data);
+    }
+    let (a, b) = data.halve(n / 2);
+    let (x, y) = join(|| pass(a), || pass(b));
+    x + y
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,6 +293,27 @@ mod tests {
                 });
             }
         });
+    }
+
+    /// A pass in halves sees every row once, each half its own rows of every slice in the
+    /// tuple, and its sum is the first half's plus the second's (exactly, for integers).
+    #[test]
+    fn a_pass_in_halves_covers_every_row_once() {
+        for n in [PAR_VERTICES - 1, PAR_VERTICES + 3] {
+            let mut out = vec![0.0f64; n];
+            let a: Vec<f64> = (0..n).map(|i| i as f64).collect();
+            let (b, c) = (vec![1.0f64; n], vec![2.0f64; n]);
+            let sum = sum_in_halves(n, (&mut out[..], &a[..], &b[..], &c[..]), |(o, a, b, c)| {
+                let mut s = 0.0;
+                for (((o, a), b), c) in o.iter_mut().zip(a).zip(b).zip(c) {
+                    *o += a + b * c;
+                    s += a;
+                }
+                s
+            });
+            assert_eq!(sum, (n * (n - 1) / 2) as f64);
+            assert!(out.iter().enumerate().all(|(i, &o)| o == i as f64 + 2.0));
+        }
     }
 
     /// A panic in either half reaches the caller, and the helper keeps working afterwards.

@@ -5,6 +5,7 @@
 
 use super::precond::Multigrid;
 use crate::linalg::{scratch, BlockCsr, Filter};
+use crate::par::sum_in_halves;
 use crate::{Mat3, Vec3};
 
 /// What one conjugate-gradient solve did.
@@ -161,53 +162,74 @@ impl Pcg {
         let mut rnorm2 = rnorm2;
         let bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
         let tol2 = tol * tol;
+        // `out = S M^-1 r`, returning `r . out`.
         let precondition =
             |pinv: &[Mat3], mg: &mut Option<&mut Multigrid>, r: &[Vec3], out: &mut [Vec3]| {
-                match mg {
-                    Some(mg) => mg.apply(r, out),
-                    None => out
-                        .iter_mut()
-                        .zip(r)
-                        .zip(pinv)
-                        .for_each(|((o, r), p)| *o = *p * *r),
+                if let Some(mg) = mg {
+                    mg.apply(r, out);
+                    sum_in_halves(n, (out, r, filt), |(out, r, filt)| {
+                        let mut d = 0.0;
+                        for ((o, r), f) in out.iter_mut().zip(r).zip(filt) {
+                            *o = f.apply(*o);
+                            d += r.dot(*o);
+                        }
+                        d
+                    })
+                } else {
+                    sum_in_halves(n, (out, r, filt, pinv), |(out, r, filt, pinv)| {
+                        let mut d = 0.0;
+                        for (((o, r), f), p) in out.iter_mut().zip(r).zip(filt).zip(pinv) {
+                            *o = f.apply(*p * *r);
+                            d += r.dot(*o);
+                        }
+                        d
+                    })
                 }
-                out.iter_mut().zip(filt).for_each(|(o, f)| *o = f.apply(*o));
             };
-        precondition(&self.pinv, &mut mg, &self.r, &mut self.c);
-        let mut delta = dot(&self.r, &self.c);
+        let mut delta = precondition(&self.pinv, &mut mg, &self.r, &mut self.c);
         let mut iterations = 0;
         let (flops, bytes) = iteration_cost(a, mg.as_deref());
         let clock = std::time::Instant::now();
+        // The vector passes run in halves on two threads for large cloths (`sum_in_halves`).
         while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
             a.mul(&self.c, &mut self.q);
-            let mut cq = 0.0;
-            for ((q, c), f) in self.q.iter_mut().zip(&self.c).zip(filt) {
-                *q = f.apply(*q);
-                cq += c.dot(*q);
-            }
+            let cq = sum_in_halves(n, (&mut self.q[..], &self.c[..], filt), |(q, c, filt)| {
+                let mut cq = 0.0;
+                for ((q, c), f) in q.iter_mut().zip(c).zip(filt) {
+                    *q = f.apply(*q);
+                    cq += c.dot(*q);
+                }
+                cq
+            });
             if cq <= 0.0 || !cq.is_finite() || delta <= 0.0 || !delta.is_finite() {
                 // Not positive definite along c (only possible with degenerate input): stop with
                 // the best iterate so far rather than divide by zero.
                 break;
             }
             let alpha = delta / cq;
-            rnorm2 = 0.0;
-            for (((x, r), c), q) in dv.iter_mut().zip(&mut self.r).zip(&self.c).zip(&self.q) {
-                *x += *c * alpha;
-                *r -= *q * alpha;
-                rnorm2 += r.length_squared();
-            }
+            let data = (&mut dv[..], &mut self.r[..], &self.c[..], &self.q[..]);
+            rnorm2 = sum_in_halves(n, data, |(dv, r, c, q)| {
+                let mut rr = 0.0;
+                for (((x, r), c), q) in dv.iter_mut().zip(r).zip(c).zip(q) {
+                    *x += *c * alpha;
+                    *r -= *q * alpha;
+                    rr += r.length_squared();
+                }
+                rr
+            });
             iterations += 1;
             if rnorm2 <= tol2 * bnorm2 {
                 break;
             }
-            precondition(&self.pinv, &mut mg, &self.r, &mut self.s);
             let delta_old = delta;
-            delta = dot(&self.r, &self.s);
+            delta = precondition(&self.pinv, &mut mg, &self.r, &mut self.s);
             let beta = delta / delta_old;
-            for (c, s) in self.c.iter_mut().zip(&self.s) {
-                *c = *s + *c * beta;
-            }
+            sum_in_halves(n, (&mut self.c[..], &self.s[..]), |(c, s)| {
+                for (c, s) in c.iter_mut().zip(s) {
+                    *c = *s + *c * beta;
+                }
+                0.0
+            });
         }
         SolveStats {
             iterations,
@@ -217,10 +239,6 @@ impl Pcg {
             bytes,
         }
     }
-}
-
-pub(crate) fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
 }
 
 #[cfg(test)]

@@ -8,9 +8,10 @@ use crate::Mat3;
 use glam::{Mat3A as M3, Vec3A as V3};
 
 /// Matrices with this many rows or more are filtered in two parallel halves.
-const PAR_FILTER_ROWS: usize = 2048;
-/// Products with this many blocks or more are split into parallel tasks.
-const PAR_BLOCKS: usize = 16 * 1024;
+const PAR_FILTER_ROWS: usize = 512;
+/// Products with this many blocks or more are split in two parallel halves (a 64x64 cloth's
+/// prolongator has ~15.7k).
+const PAR_BLOCKS: usize = 8 * 1024;
 /// Positive couplings below this fraction of the geometric mean of their two diagonal blocks
 /// (Frobenius norms) are lumped onto the diagonal in the preconditioner (see [`Csr::filtered`]).
 const DROP: f64 = 1e-3;
