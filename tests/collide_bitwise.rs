@@ -107,10 +107,12 @@ const EXPECTED: &[(&str, u64)] = &[
     // then polished to the scene's tolerance (`integrate/implicit/step.rs`). crumple64_near
     // re-recorded when levels from 512 rows on came to be smoothed in two halves and CG's
     // vector passes to be summed in two (`integrate/precond/smooth.rs`, `integrate/cg.rs`).
-    ("crumple16_self", 0x511f7162970c3669),
-    ("crumple64_near", 0xcf068c789488982f),
-    ("chair16_edges", 0x116cacf46a950e77),
-    ("pick12_robot", 0xf2e3984837288b00),
+    // All four re-recorded when a solve whose start meets its tolerance came to leave the
+    // multigrid alone (`integrate/implicit/solve.rs`): its rebuild schedule counts other solves.
+    ("crumple16_self", 0xbccc7bbfe935722e),
+    ("crumple64_near", 0x27a94edce85dafcc),
+    ("chair16_edges", 0x721f36e3721a7b30),
+    ("pick12_robot", 0x63f5f0ccd52eb207),
     ("sphere16_projection", 0xfadc50a365b3a77e),
 ];
 

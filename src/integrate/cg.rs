@@ -51,6 +51,9 @@ pub(crate) struct Pcg {
     /// The second start direction and its product.
     h: Vec<Vec3>,
     ah: Vec<Vec3>,
+    /// `|S r|^2` and `|S b|^2` of the start (see [`Pcg::start`]).
+    rnorm2: f64,
+    bnorm2: f64,
 }
 
 impl Pcg {
@@ -64,12 +67,32 @@ impl Pcg {
         filt: &[Filter],
         b: &[Vec3],
         z: &[Vec3],
-        mut mg: Option<&mut Multigrid>,
+        mg: Option<&mut Multigrid>,
         tol: f64,
         max_iterations: u32,
         dv: &mut [Vec3],
         second: Option<&[Vec3]>,
     ) -> SolveStats {
+        match self.start(a, filt, b, z, tol, dv, second) {
+            Some(done) => done,
+            None => self.iterate(a, filt, mg, tol, max_iterations, dv),
+        }
+    }
+
+    /// The start of [`Pcg::solve`]: `dv` set to the best start and the residual computed.
+    /// Returns the solve's outcome when that start already meets the tolerance, so that a
+    /// caller can leave the preconditioner alone (its update can cost more than the solve).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn start(
+        &mut self,
+        a: &BlockCsr,
+        filt: &[Filter],
+        b: &[Vec3],
+        z: &[Vec3],
+        tol: f64,
+        dv: &mut [Vec3],
+        second: Option<&[Vec3]>,
+    ) -> Option<SolveStats> {
         let n = b.len();
         for buf in [&mut self.r, &mut self.c, &mut self.q, &mut self.s] {
             scratch(buf, n);
@@ -158,9 +181,29 @@ impl Pcg {
                 }
             }
         }
-        let rnorm2: f64 = self.r.iter().map(|r| r.length_squared()).sum();
-        let mut rnorm2 = rnorm2;
-        let bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
+        self.rnorm2 = self.r.iter().map(|r| r.length_squared()).sum();
+        self.bnorm2 = bnorm2.max(f64::MIN_POSITIVE);
+        (self.rnorm2 <= tol * tol * self.bnorm2).then(|| SolveStats {
+            iterations: 0,
+            residual: (self.rnorm2 / self.bnorm2).sqrt(),
+            seconds: 0.0,
+            flops: 0.0,
+            bytes: 0.0,
+        })
+    }
+
+    /// The iterations of [`Pcg::solve`] from the start [`Pcg::start`] left in `dv`.
+    pub(crate) fn iterate(
+        &mut self,
+        a: &BlockCsr,
+        filt: &[Filter],
+        mut mg: Option<&mut Multigrid>,
+        tol: f64,
+        max_iterations: u32,
+        dv: &mut [Vec3],
+    ) -> SolveStats {
+        let n = dv.len();
+        let (mut rnorm2, bnorm2) = (self.rnorm2, self.bnorm2);
         let tol2 = tol * tol;
         // `out = S M^-1 r`, returning `r . out`.
         let precondition =

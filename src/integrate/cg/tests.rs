@@ -39,3 +39,37 @@ fn start_directions_span_the_solution() {
         assert!(s.residual <= 1e-9 && dv.iter().all(|v| v.is_finite()));
     }
 }
+
+/// `start` answers alone exactly when its start meets the tolerance: from the solution it
+/// returns it unchanged with no iteration, from zero it leaves the iterations to `iterate`,
+/// and the two together are `solve`, bit for bit.
+#[test]
+fn a_start_that_meets_the_tolerance_needs_no_iteration() {
+    let a = cloth_system(12);
+    let n = a.rows();
+    let mut rng = Rng(5);
+    let (filt, z) = constraints(n, &mut rng);
+    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+    let mut pcg = Pcg::default();
+    let mut dv = x.clone();
+    let done = pcg.start(&a, &filt, &b, &z, 1e-9, &mut dv, None);
+    let done = done.expect("the solution meets the tolerance");
+    assert_eq!(done.iterations, 0);
+    assert!(done.residual <= 1e-9, "{done:?}");
+    for i in 0..n {
+        assert!(
+            (dv[i] - x[i]).length() <= 1e-9 * (1.0 + x[i].length()),
+            "vertex {i}"
+        );
+    }
+    let mut split = vec![Vec3::ZERO; n];
+    assert!(pcg
+        .start(&a, &filt, &b, &z, 1e-9, &mut split, None)
+        .is_none());
+    let s = pcg.iterate(&a, &filt, None, 1e-9, 10_000, &mut split);
+    let mut whole = vec![Vec3::ZERO; n];
+    let w = Pcg::default().solve(&a, &filt, &b, &z, None, 1e-9, 10_000, &mut whole, None);
+    assert!(s.iterations > 0 && s.iterations == w.iterations);
+    assert_eq!(split, whole);
+}

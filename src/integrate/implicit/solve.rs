@@ -10,7 +10,9 @@ use crate::linalg::Filter;
 use crate::Vec3;
 
 impl Implicit {
-    /// Solves `A dv = b` with the constrained part `z` (dv holds the start).
+    /// Solves `A dv = b` with the constrained part `z` (dv holds the start). A start that meets
+    /// `tol` already (an active-set round that moved the answer less than that) returns at once:
+    /// no preconditioner update, and the rebuild schedule counts only solves that iterate.
     /// `history`: `dv` holds the last step's velocity change and `older` the one before, both
     /// start directions (else `dv` alone).
     ///
@@ -33,26 +35,24 @@ impl Implicit {
                 h.rebuild |= h.filter_changed(filt);
             }
         }
+        let Some(a) = self.a.as_ref() else {
+            unreachable!("prepared by the step");
+        };
+        let second = history.then_some(self.older.as_slice());
+        if let Some(done) = (self.pcg).start(a, filt, &self.b, &self.z, tol, &mut self.dv, second) {
+            // The start meets the tolerance (an active-set round that moved the answer less
+            // than the tolerance): no preconditioner update, and nothing for the schedule.
+            return done;
+        }
         let use_mg = self.update_hierarchy(filt, short, history).is_some();
         let Some(a) = self.a.as_ref() else {
-            unreachable!("prepared above");
+            unreachable!("prepared by the step");
         };
         let mgref = match self.hierarchy.as_mut() {
             Some(h) if use_mg => Some(&mut h.mg),
             _ => None,
         };
-        let second = history.then_some(self.older.as_slice());
-        let mut stats = self.pcg.solve(
-            a,
-            filt,
-            &self.b,
-            &self.z,
-            mgref,
-            tol,
-            max_it,
-            &mut self.dv,
-            second,
-        );
+        let mut stats = self.pcg.iterate(a, filt, mgref, tol, max_it, &mut self.dv);
         if use_mg && (stats.residual.is_nan() || stats.residual > tol) && stats.iterations < max_it
         {
             // The multigrid-preconditioned iteration broke down early (degenerate input): retry
