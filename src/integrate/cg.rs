@@ -25,8 +25,8 @@ pub(crate) struct SolveStats {
 /// Floating-point operations and the least bytes one PCG iteration below streams: the product
 /// `A c` ([`BlockCsr::mul_bytes`]), the preconditioner (the V-cycle's
 /// [`Multigrid::apply_cost`], or block Jacobi's 3x3 inverse per vertex), and the vector passes
-/// of the loop (filter and dot of `q`; `dv`, `r` and `|r|^2`; the filter of `M^-1 r`; `r . s`;
-/// `c = s + beta c`: 16 reads or writes of `Vec3` and two of the filter per vertex).
+/// of the loop (filter and dot of `q`; `dv`, `r` and `|r|^2`; the filter of `M^-1 r` and
+/// `r . s`; `c = s + beta c`: 15 reads or writes of `Vec3` and two of the filter per vertex).
 pub(crate) fn iteration_cost(a: &BlockCsr, mg: Option<&Multigrid>) -> (f64, f64) {
     let n = a.rows() as f64;
     let filter = std::mem::size_of::<Filter>() as f64;
@@ -36,7 +36,7 @@ pub(crate) fn iteration_cost(a: &BlockCsr, mg: Option<&Multigrid>) -> (f64, f64)
     };
     (
         a.mul_flops() + pf + 60.0 * n,
-        a.mul_bytes() + pb + n * (16.0 * 24.0 + 2.0 * filter),
+        a.mul_bytes() + pb + n * (15.0 * 24.0 + 2.0 * filter),
     )
 }
 
