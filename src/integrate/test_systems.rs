@@ -95,6 +95,23 @@ pub(crate) fn constraints(n: usize, rng: &mut Rng) -> (Vec<Filter>, Vec<Vec3>) {
     (filt, z)
 }
 
+/// The 12x12 cloth system with [`constraints`], a random right-hand side and its solution to
+/// 1e-13: `(a, filt, z, b, x)`. `rng` goes on for the caller's own draws.
+pub(crate) fn solved_cloth(
+    rng: &mut Rng,
+) -> (BlockCsr, Vec<Filter>, Vec<Vec3>, Vec<Vec3>, Vec<Vec3>) {
+    let a = cloth_system(12);
+    let n = a.rows();
+    let (filt, z) = constraints(n, rng);
+    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+    (a, filt, z, b, x)
+}
+
+pub(crate) fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
+}
+
 pub(crate) fn solve(
     a: &BlockCsr,
     filt: &[Filter],

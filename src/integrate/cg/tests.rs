@@ -8,12 +8,9 @@ use crate::integrate::test_systems::*;
 /// (parallel to the first, or not finite) falls back to the first alone.
 #[test]
 fn start_directions_span_the_solution() {
-    let a = cloth_system(12);
-    let n = a.rows();
     let mut rng = Rng(21);
-    let (filt, z) = constraints(n, &mut rng);
-    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
-    let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
+    let (a, filt, z, b, x) = solved_cloth(&mut rng);
+    let n = a.rows();
     let e: Vec<Vec3> = (0..n).map(|_| rng.vec3() * 0.1).collect();
     // x = (g - h) / 0.3 on the free components.
     let g: Vec<Vec3> = x.iter().zip(&e).map(|(x, e)| *x * 0.3 + *e).collect();
@@ -45,12 +42,8 @@ fn start_directions_span_the_solution() {
 /// and the two together are `solve`, bit for bit.
 #[test]
 fn a_start_that_meets_the_tolerance_needs_no_iteration() {
-    let a = cloth_system(12);
+    let (a, filt, z, b, x) = solved_cloth(&mut Rng(5));
     let n = a.rows();
-    let mut rng = Rng(5);
-    let (filt, z) = constraints(n, &mut rng);
-    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
-    let (x, _) = solve(&a, &filt, &b, &z, false, 1e-13);
     let mut pcg = Pcg::default();
     let mut dv = x.clone();
     let done = pcg.start(&a, &filt, &b, &z, 1e-9, &mut dv, None);

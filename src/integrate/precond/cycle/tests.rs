@@ -95,7 +95,3 @@ fn iterations_do_not_grow_with_resolution() {
     // Measured 12, 13, 13 (block Jacobi: 185, 359, 628, growing like res).
     assert!(its.iter().all(|&k| k <= 20), "{its:?}");
 }
-
-fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
-}
