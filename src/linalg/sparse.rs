@@ -68,6 +68,7 @@ impl PatternBuilder {
             diag,
             zero: true,
             pattern: NEXT_PATTERN.fetch_add(1, Ordering::Relaxed),
+            edits: Edits::default(),
         }
     }
 }
@@ -84,6 +85,33 @@ pub struct BlockCsr {
     zero: bool,
     /// Identifies the pattern (shared by clones): cached slot indices are valid for it.
     pattern: u64,
+    /// Which rows changed since [`BlockCsr::clear_edits`]: lets a copy derived from the matrix
+    /// row by row (the multigrid's filtered finest level) redo only those rows.
+    edits: Edits,
+}
+
+/// The rows a [`BlockCsr`]'s values changed in: a list while only [`BlockCsr::add`] touched
+/// them (an active-set round's few refits), every row after any other write.
+#[derive(Debug, Clone)]
+struct Edits {
+    all: bool,
+    rows: Vec<u32>,
+}
+
+impl Default for Edits {
+    fn default() -> Self {
+        Edits {
+            all: true,
+            rows: Vec::new(),
+        }
+    }
+}
+
+impl Edits {
+    fn everything(&mut self) {
+        self.all = true;
+        self.rows.clear();
+    }
 }
 
 impl BlockCsr {
@@ -129,17 +157,37 @@ impl BlockCsr {
         self.cols[s..e].binary_search(&j).ok().map(|k| s + k)
     }
 
+    /// Adds `m` to block (i, j); the edit log records row `i`.
     #[inline]
     pub fn add(&mut self, i: u32, j: u32, m: Mat3) {
         let s = self.slot(i, j);
         self.vals[s] += m;
         self.zero = false;
+        if !self.edits.all {
+            self.edits.rows.push(i);
+        }
     }
 
+    /// Adds `m` at a cached slot (assembly); the edit log then counts every row as changed.
     #[inline]
     pub fn add_at(&mut self, slot: usize, m: Mat3) {
         self.vals[slot] += m;
         self.zero = false;
+        if !self.edits.all {
+            self.edits.everything();
+        }
+    }
+
+    /// The rows whose values changed since the last [`BlockCsr::clear_edits`] (with repeats, in
+    /// no order), or `None` when any row may have (a new matrix, assembly, a bulk write).
+    pub fn edited_rows(&self) -> Option<&[u32]> {
+        (!self.edits.all).then_some(self.edits.rows.as_slice())
+    }
+
+    /// Starts a new edit log: what derives from the matrix is up to date with it now.
+    pub fn clear_edits(&mut self) {
+        self.edits.all = false;
+        self.edits.rows.clear();
     }
 
     /// Bytes one `mul` streams at the least: every block (f64 3x3) with its column index, the
@@ -167,6 +215,7 @@ impl BlockCsr {
             self.vals.copy_from_slice(&other.vals);
         }
         self.zero = other.zero;
+        self.edits.everything();
     }
 
     /// Column indices and blocks of row `r` (read-only view for preconditioners).
@@ -185,6 +234,7 @@ impl BlockCsr {
             self.vals.iter_mut().for_each(|v| *v = Mat3::ZERO);
         }
         self.zero = true;
+        self.edits.everything();
     }
 
     /// Sets `self = a * self + b * other` (same pattern).
@@ -198,6 +248,7 @@ impl BlockCsr {
             }
             self.zero = false;
         }
+        self.edits.everything();
     }
 
     /// Adds `d[i] * I` to each diagonal block.
@@ -206,6 +257,7 @@ impl BlockCsr {
             self.vals[self.diag[i]] += Mat3::from_diagonal(Vec3::splat(di));
         }
         self.zero = false;
+        self.edits.everything();
     }
 
     #[inline(always)]

@@ -96,7 +96,9 @@ impl Implicit {
 
     /// Gives the multigrid the current filtered matrix: a fresh hierarchy when none exists or the
     /// last one has aged (iterations drifting up or `REBUILD_EVERY` steps), else only the finest
-    /// level. `None` means block Jacobi (multigrid disabled or its setup failed).
+    /// level (only its rows an active-set round changed, when that is all that changed since:
+    /// `BlockCsr::edited_rows` and `Multigrid::refilter_finest`). `None` means block Jacobi
+    /// (multigrid disabled or its setup failed).
     ///
     /// A short step (`short`: split or subdivided) gets coarse values along the last full step's
     /// aggregates at its first solve (`history`), the finest level alone at its re-solves, and
@@ -112,11 +114,6 @@ impl Implicit {
         }
         let a = self.a.as_ref()?;
         let n = a.rows();
-        let mut fine = match self.hierarchy.as_mut() {
-            Some(h) => h.mg.take_finest(),
-            None => std::mem::take(&mut self.filtered),
-        };
-        fine.filtered(a, filt);
         let reuse = self
             .hierarchy
             .as_ref()
@@ -124,10 +121,30 @@ impl Implicit {
         if reuse {
             if let Some(h) = self.hierarchy.as_mut() {
                 let rebuild = if short { history } else { h.rebuild };
-                let done = if rebuild {
-                    h.mg.rebuild(fine)
-                } else {
-                    h.mg.refresh_finest(fine)
+                // An active-set round's refits and releases change a few rows: only those are
+                // refiltered when nothing else changed since the last filtering.
+                if std::env::var("DRAPE_PROBE_RF").is_ok() {
+                    eprintln!(
+                        "RQ edited={:?} rebuild={rebuild}",
+                        a.edited_rows().map(|r| r.len())
+                    );
+                }
+                let refiltered = match a.edited_rows() {
+                    Some(edited) if !rebuild => h.mg.refilter_finest(a, filt, edited),
+                    _ => Ok(false),
+                };
+                let done = match refiltered {
+                    Ok(true) => Ok(()),
+                    Ok(false) => {
+                        let mut fine = h.mg.take_finest();
+                        fine.filtered(a, filt);
+                        if rebuild {
+                            h.mg.rebuild(fine)
+                        } else {
+                            h.mg.refresh_finest(fine)
+                        }
+                    }
+                    Err(e) => Err(e),
                 };
                 match done {
                     Ok(()) if short => h.rebuild = true,
@@ -148,11 +165,22 @@ impl Implicit {
                         return None;
                     }
                 }
+                if let Some(a) = self.a.as_mut() {
+                    a.clear_edits();
+                }
                 return self.hierarchy.as_mut().map(|h| &mut h.mg);
             }
         }
+        let mut fine = match self.hierarchy.as_mut() {
+            Some(h) => h.mg.take_finest(),
+            None => std::mem::take(&mut self.filtered),
+        };
+        fine.filtered(a, filt);
         match Multigrid::build(fine) {
             Ok(mg) => {
+                if let Some(a) = self.a.as_mut() {
+                    a.clear_edits();
+                }
                 self.hierarchy = Some(Hierarchy {
                     mg,
                     pending: Pending::Full,

@@ -8,7 +8,8 @@ use super::cycle::cycle;
 use super::dense::Dense;
 use super::error::MultigridError;
 use super::prolong::{smoothed_prolongator, spectral_radius};
-use super::smooth::{invert_diagonal, Halves, Level};
+use super::smooth::{invert_block, invert_diagonal, Halves, Level};
+use crate::linalg::{BlockCsr, Filter};
 use crate::Vec3;
 
 /// Stop coarsening at this many block rows; solve there with dense Cholesky.
@@ -25,6 +26,8 @@ pub struct Multigrid {
     pub(super) tmp: Vec<f64>,
     /// How each level was coarsened, for [`Multigrid::rebuild`].
     pub(super) coarsening: Vec<Coarsening>,
+    /// Scratch of [`Multigrid::refilter_finest`]: the rows it rewrote.
+    rows: Vec<u32>,
 }
 
 /// The symbolic part of one coarsening: the aggregate of every row, the aggregate count and
@@ -116,6 +119,7 @@ impl Multigrid {
             dense,
             tmp: Vec::new(),
             coarsening,
+            rows: Vec::new(),
         })
     }
 
@@ -157,6 +161,43 @@ impl Multigrid {
         l0.diag = diag;
         l0.dinv = dinv;
         Ok(())
+    }
+
+    /// The finest level refiltered from `a` in the rows that changed since its last filtering
+    /// (see [`Csr::refiltered`]), the coarse levels as they were: what
+    /// [`Multigrid::refresh_finest`] gives, for a fraction of the full pass. `Ok(false)` when it
+    /// cannot (the caller refreshes in full).
+    pub fn refilter_finest(
+        &mut self,
+        a: &BlockCsr,
+        filter: &[Filter],
+        edited: &[u32],
+    ) -> Result<bool, MultigridError> {
+        let mut rows = std::mem::take(&mut self.rows);
+        let l0 = &mut self.levels[0];
+        let done = l0.a.refiltered(a, filter, edited, &mut rows);
+        let result = match done {
+            None => Ok(false),
+            Some(moved) => {
+                if moved {
+                    // Rows moved in the arrays: the diagonal's slots and the halves' cuts anew.
+                    l0.diag = l0.a.diagonal_slots(0)?;
+                    if let Some(h) = l0.halves.as_mut() {
+                        h.find_split(&l0.a);
+                    }
+                }
+                rows.iter()
+                    .map(|&r| r as usize)
+                    .try_for_each(|r| {
+                        l0.dinv[r] = invert_block(l0.a.vals[l0.diag[r]])
+                            .ok_or(MultigridError::SingularDiagonal { level: 0, row: r })?;
+                        Ok(())
+                    })
+                    .map(|()| true)
+            }
+        };
+        self.rows = rows;
+        result
     }
 
     /// Floating-point operations and least bytes streamed by one [`Multigrid::apply`] (see

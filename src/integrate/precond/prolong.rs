@@ -3,7 +3,7 @@
 //! Jacobi, with `omega = 4 / (3 rho(D^-1 A))`.
 
 use super::aggregate::ISOLATED;
-use super::csr::{Csr, Spill};
+use super::csr::Csr;
 use glam::{Mat3A as M3, Vec3A as V3};
 
 /// Largest eigenvalue of `D^-1 A` by power iteration (a slight overestimate is harmless).
@@ -57,9 +57,8 @@ pub(super) fn smoothed_prolongator(
         row_start: Vec::with_capacity(n + 1),
         cols: Vec::new(),
         vals: Vec::new(),
-        dnorm: Vec::new(),
         ncols: nc,
-        spill: Spill::default(),
+        ..Csr::default()
     };
     p.row_start.push(0);
     for i in 0..n {

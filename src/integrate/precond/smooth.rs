@@ -229,14 +229,12 @@ pub(super) fn invert_diagonal(a: &Csr, level: usize) -> Result<Vec<M3>, Multigri
     let diag = a.diagonal_blocks(level)?;
     diag.iter()
         .enumerate()
-        .map(|(row, d)| {
-            let det = d.determinant();
-            let inv = d.inverse();
-            if det > 0.0 && inv.is_finite() {
-                Ok(inv)
-            } else {
-                Err(MultigridError::SingularDiagonal { level, row })
-            }
-        })
+        .map(|(row, d)| invert_block(*d).ok_or(MultigridError::SingularDiagonal { level, row }))
         .collect()
+}
+
+/// The inverse of a diagonal block, `None` unless it is positive definite enough to invert.
+pub(super) fn invert_block(d: M3) -> Option<M3> {
+    let inv = d.inverse();
+    (d.determinant() > 0.0 && inv.is_finite()).then_some(inv)
 }

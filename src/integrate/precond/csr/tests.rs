@@ -152,3 +152,56 @@ fn weak_positive_couplings_are_lumped_and_translations_kept() {
     }
     assert!(Dense::factor(&f).is_ok());
 }
+
+/// Refiltering only the rows an active-set round changed gives the full pass's matrix, block
+/// for block: after friction-drag-like diagonal changes and holds gained and released (the
+/// rows keep their columns: rewritten in place), and after a vertex fixed (its couplings vanish
+/// and are lumped: later rows move).
+#[test]
+fn refiltering_changed_rows_is_the_full_pass() {
+    let mut a = crate::integrate::test_systems::cloth_system(24);
+    let n = a.rows();
+    let mut filter: Vec<Filter> = (0..n)
+        .map(|i| match i % 11 {
+            4 => Filter::Direction(Vec3::new(0.0, 0.6, 0.8)),
+            _ => Filter::Free,
+        })
+        .collect();
+    let mut inc = Csr::default();
+    inc.filtered(&a, &filter);
+    a.clear_edits();
+    let mut rows = Vec::new();
+    let check = |inc: &Csr, a: &BlockCsr, filter: &[Filter]| {
+        let mut full = Csr::default();
+        full.filtered(a, filter);
+        assert_eq!(inc.row_start, full.row_start);
+        assert_eq!(inc.cols, full.cols);
+        assert_eq!(inc.vals, full.vals);
+    };
+    // A round: drags refitted on a few diagonals, one hold released and one gained.
+    for i in [3u32, 200, 201, 575] {
+        a.add(i, i, Mat3::IDENTITY * 0.3);
+    }
+    filter[4] = Filter::Free;
+    filter[100] = Filter::Direction(Vec3::new(0.8, 0.0, 0.6));
+    let edited = a
+        .edited_rows()
+        .expect("only adds since the last clear")
+        .to_vec();
+    assert_eq!(inc.refiltered(&a, &filter, &edited, &mut rows), Some(false));
+    assert!(rows.len() < n / 10, "{} rows rewritten", rows.len());
+    check(&inc, &a, &filter);
+    a.clear_edits();
+    // A vertex fixed: its couplings become zero blocks, lumped onto the diagonal.
+    filter[300] = Filter::Fixed;
+    assert_eq!(inc.refiltered(&a, &filter, &[], &mut rows), Some(true));
+    check(&inc, &a, &filter);
+    // Nothing changed: nothing to do.
+    assert_eq!(inc.refiltered(&a, &filter, &[], &mut rows), Some(false));
+    assert!(rows.is_empty());
+    // Another pattern, or a bulk write (its edits are not listed): the full pass is needed.
+    a.add_diagonal(&vec![0.0; n]);
+    assert!(a.edited_rows().is_none());
+    let other = crate::integrate::test_systems::cloth_system(24);
+    assert_eq!(inc.refiltered(&other, &filter, &[], &mut rows), None);
+}
