@@ -39,6 +39,15 @@ pub struct Csr {
     pub(super) spare: Spill,
 }
 
+/// One half of a product's rows ([`Csr::matmul_rows`]) and the column marker it used.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Part {
+    pub(super) lens: Vec<usize>,
+    pub(super) cols: Vec<u32>,
+    pub(super) vals: Vec<M3>,
+    marker: Vec<usize>,
+}
+
 /// Rows filtered in parallel before they are appended.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Spill {
@@ -322,78 +331,106 @@ impl Csr {
             .collect()
     }
 
-    /// Transpose of an `rows x ncols` block matrix (blocks transposed too).
-    pub(super) fn transpose(&self, ncols: usize) -> Csr {
-        let mut count = vec![0usize; ncols + 1];
+    /// The transpose of an `rows x ncols` block matrix (blocks transposed too), into `out`'s
+    /// storage.
+    pub(super) fn transpose_into(&self, ncols: usize, out: &mut Csr) {
+        let count = &mut out.row_start;
+        count.clear();
+        count.resize(ncols + 1, 0);
         for &c in &self.cols {
             count[c as usize + 1] += 1;
         }
         for k in 0..ncols {
             count[k + 1] += count[k];
         }
-        let mut next = count.clone();
-        let mut cols = vec![0u32; self.cols.len()];
-        let mut vals = vec![M3::ZERO; self.cols.len()];
+        let next = &mut out.spill.ends;
+        next.clone_from(count);
+        // Every slot is written below: only new ones need a value first.
+        out.cols.resize(self.cols.len(), 0);
+        out.vals.resize(self.cols.len(), M3::ZERO);
         for r in 0..self.rows() {
             let (rc, rv) = self.row(r);
             for (&c, &m) in rc.iter().zip(rv) {
                 let dst = next[c as usize];
                 next[c as usize] += 1;
-                cols[dst] = r as u32;
-                vals[dst] = m.transpose();
+                out.cols[dst] = r as u32;
+                out.vals[dst] = m.transpose();
             }
         }
-        Csr {
-            row_start: count,
-            cols,
-            vals,
-            ncols: self.rows(),
-            ..Csr::default()
-        }
+        out.ncols = self.rows();
     }
 
     /// `self * other` (Gustavson), `other` having `ncols` block columns; large products in two
     /// halves by work (each row's result does not depend on the split).
+    #[cfg(test)]
     pub(super) fn matmul(&self, other: &Csr, ncols: usize) -> Csr {
-        let rows = self.rows();
-        let part = |range: std::ops::Range<usize>| self.matmul_rows(other, ncols, range);
-        let parts = if self.cols.len() >= PAR_BLOCKS {
-            let mid = self.work_split();
-            let (a, b) = crate::par::join(|| part(0..mid), || part(mid..rows));
-            vec![a, b]
-        } else {
-            vec![part(0..rows)]
-        };
-        let mut out = Csr {
-            row_start: Vec::with_capacity(rows + 1),
-            cols: Vec::new(),
-            vals: Vec::new(),
-            ncols,
-            ..Csr::default()
-        };
-        out.row_start.push(0);
-        for (lens, cols, vals) in parts {
-            for l in lens {
-                let last = *out.row_start.last().unwrap_or(&0);
-                out.row_start.push(last + l);
-            }
-            out.cols.extend(cols);
-            out.vals.extend(vals);
-        }
+        let mut out = Csr::default();
+        self.matmul_into(other, ncols, &mut out, &mut Default::default());
         out
     }
 
-    /// Rows `range` of `self * other`: each row's length, columns and blocks.
-    fn matmul_rows(
+    /// [`Csr::matmul`] into `out`'s storage, the second half's rows first into `parts[1]`
+    /// (storage kept across rebuilds, so that the products write into warm memory).
+    pub(super) fn matmul_into(
+        &self,
+        other: &Csr,
+        ncols: usize,
+        out: &mut Csr,
+        parts: &mut [Part; 2],
+    ) {
+        let rows = self.rows();
+        let [first, second] = parts;
+        let (cols, vals) = (&mut out.cols, &mut out.vals);
+        let mid = if self.cols.len() >= PAR_BLOCKS {
+            let mid = self.work_split();
+            crate::par::join(
+                || self.matmul_rows(other, ncols, 0..mid, first, (cols, vals)),
+                || {
+                    let Part { cols, vals, .. } = second;
+                    let (mut c, mut v) = (std::mem::take(cols), std::mem::take(vals));
+                    self.matmul_rows(other, ncols, mid..rows, second, (&mut c, &mut v));
+                    (second.cols, second.vals) = (c, v);
+                },
+            );
+            mid
+        } else {
+            self.matmul_rows(other, ncols, 0..rows, first, (cols, vals));
+            rows
+        };
+        out.row_start.clear();
+        out.row_start.push(0);
+        let mut push_rows = |lens: &[usize]| {
+            for &l in lens {
+                let last = *out.row_start.last().unwrap_or(&0);
+                out.row_start.push(last + l);
+            }
+        };
+        push_rows(&first.lens);
+        if mid < rows {
+            push_rows(&second.lens);
+            out.cols.extend_from_slice(&second.cols);
+            out.vals.extend_from_slice(&second.vals);
+        }
+        out.ncols = ncols;
+    }
+
+    /// Rows `range` of `self * other`: each row's length into `part.lens`, its columns and
+    /// blocks appended to `out` (cleared first); `part.marker` is scratch.
+    pub(super) fn matmul_rows(
         &self,
         other: &Csr,
         ncols: usize,
         range: std::ops::Range<usize>,
-    ) -> (Vec<usize>, Vec<u32>, Vec<M3>) {
-        let mut marker = vec![usize::MAX; ncols];
-        let mut lens = Vec::with_capacity(range.len());
-        let mut cols = Vec::new();
-        let mut vals: Vec<M3> = Vec::new();
+        part: &mut Part,
+        out: (&mut Vec<u32>, &mut Vec<M3>),
+    ) {
+        let (cols, vals) = out;
+        let Part { lens, marker, .. } = part;
+        marker.clear();
+        marker.resize(ncols, usize::MAX);
+        lens.clear();
+        cols.clear();
+        vals.clear();
         for r in range {
             let row_begin = cols.len();
             let (ac, av) = self.row(r);
@@ -412,7 +449,6 @@ impl Csr {
             }
             lens.push(cols.len() - row_begin);
         }
-        (lens, cols, vals)
     }
 
     /// The row that splits this matrix's blocks in two near-equal halves.

@@ -3,7 +3,7 @@
 //! one V-cycle as the preconditioner.
 
 use super::aggregate::aggregate;
-use super::csr::Csr;
+use super::csr::{Csr, Part};
 use super::cycle::cycle;
 use super::dense::Dense;
 use super::error::MultigridError;
@@ -28,6 +28,17 @@ pub struct Multigrid {
     pub(super) coarsening: Vec<Coarsening>,
     /// Scratch of [`Multigrid::refilter_finest`]: the rows it rewrote.
     rows: Vec<u32>,
+    /// Storage of the build's products, written into again by the next rebuild: each level's
+    /// `A P`, the halves of a product, the prolongator's column marker.
+    products: Products,
+}
+
+/// What [`Multigrid::construct`] computes into besides the levels (see [`Multigrid::rebuild`]).
+#[derive(Debug, Clone, Default)]
+struct Products {
+    ap: Vec<Csr>,
+    parts: [Part; 2],
+    marker: Vec<usize>,
 }
 
 /// The symbolic part of one coarsening: the aggregate of every row, the aggregate count and
@@ -42,7 +53,7 @@ pub(super) struct Coarsening {
 impl Multigrid {
     /// Builds the hierarchy for the (filtered, SPD) matrix `a`.
     pub fn build(a: Csr) -> Result<Multigrid, MultigridError> {
-        Self::construct(a, None)
+        Self::construct(a, None, Vec::new(), Products::default())
     }
 
     /// Rebuilds the hierarchy for `a` (same size) with the last build's aggregates and
@@ -54,21 +65,30 @@ impl Multigrid {
             *self = Self::build(a)?;
             return Ok(());
         }
+        // The old levels' storage is written into again (warm memory).
         let plan = std::mem::take(&mut self.coarsening);
-        *self = Self::construct(a, Some(plan))?;
+        let old = std::mem::take(&mut self.levels);
+        let products = std::mem::take(&mut self.products);
+        *self = Self::construct(a, Some(plan), old, products)?;
         Ok(())
     }
 
-    /// A full build (`plan` = `None`), or one along a given coarsening.
-    pub(super) fn construct(
+    /// A full build (`plan` = `None`), or one along a given coarsening; the products are
+    /// computed into the storage of `old` levels and `products` where given.
+    fn construct(
         a: Csr,
         plan: Option<Vec<Coarsening>>,
+        old: Vec<Level>,
+        mut products: Products,
     ) -> Result<Multigrid, MultigridError> {
         if a.rows() == 0 {
             return Err(MultigridError::Empty);
         }
         let mut levels = vec![Level::new(a, 0)?];
         let mut coarsening = Vec::new();
+        // The old levels' prolongators, their transposes and matrices, by depth.
+        let (mut old_p, mut old_a): (Vec<(Csr, Csr)>, Vec<Csr>) =
+            old.into_iter().map(|l| ((l.p, l.pt), l.a)).unzip();
         let mut plan = plan.map(Vec::into_iter);
         while levels.len() < MAX_LEVELS {
             let depth = levels.len() - 1;
@@ -93,10 +113,36 @@ impl Multigrid {
                 }
             };
             let nc = step.nc;
-            let p = smoothed_prolongator(&fine.a, &fine.dinv, &step.agg, nc, step.omega);
-            let pt = p.transpose(nc);
-            let ap = fine.a.matmul(&p, nc);
-            let coarse = pt.matmul(&ap, nc);
+            let (mut p, mut pt) = old_p.get_mut(depth).map(std::mem::take).unwrap_or_default();
+            let mut coarse = old_a
+                .get_mut(depth + 1)
+                .map(std::mem::take)
+                .unwrap_or_default();
+            if products.ap.len() <= depth {
+                products.ap.resize_with(depth + 1, Csr::default);
+            }
+            let ap = &mut products.ap[depth];
+            let marker = &mut products.marker;
+            let t0 = std::time::Instant::now();
+            smoothed_prolongator(
+                &fine.a, &fine.dinv, &step.agg, nc, step.omega, &mut p, marker,
+            );
+            let t1 = std::time::Instant::now();
+            p.transpose_into(nc, &mut pt);
+            let t2 = std::time::Instant::now();
+            fine.a.matmul_into(&p, nc, ap, &mut products.parts);
+            let t3 = std::time::Instant::now();
+            pt.matmul_into(ap, nc, &mut coarse, &mut products.parts);
+            let t4 = std::time::Instant::now();
+            if std::env::var("PT").is_ok() {
+                eprintln!(
+                    "L{depth} p {:.3} t {:.3} ap {:.3} ptap {:.3}",
+                    (t1 - t0).as_secs_f64() * 1e3,
+                    (t2 - t1).as_secs_f64() * 1e3,
+                    (t3 - t2).as_secs_f64() * 1e3,
+                    (t4 - t3).as_secs_f64() * 1e3
+                );
+            }
             fine.p = p;
             fine.pt = pt;
             coarsening.push(step);
@@ -120,6 +166,7 @@ impl Multigrid {
             tmp: Vec::new(),
             coarsening,
             rows: Vec::new(),
+            products,
         })
     }
 

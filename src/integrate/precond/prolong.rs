@@ -43,23 +43,23 @@ pub(super) fn spectral_radius(a: &Csr, dinv: &[M3]) -> f32 {
 }
 
 /// `P = (I - omega D^-1 A) P_tent`, `P_tent` = one identity block per row in its aggregate column
-/// (none for an [`ISOLATED`] row).
+/// (none for an [`ISOLATED`] row), into `p`'s storage; `marker` is scratch.
 pub(super) fn smoothed_prolongator(
     a: &Csr,
     dinv: &[M3],
     agg: &[u32],
     nc: usize,
     omega: f32,
-) -> Csr {
+    p: &mut Csr,
+    marker: &mut Vec<usize>,
+) {
     let n = a.rows();
-    let mut marker = vec![usize::MAX; nc];
-    let mut p = Csr {
-        row_start: Vec::with_capacity(n + 1),
-        cols: Vec::new(),
-        vals: Vec::new(),
-        ncols: nc,
-        ..Csr::default()
-    };
+    marker.clear();
+    marker.resize(nc, usize::MAX);
+    p.row_start.clear();
+    p.cols.clear();
+    p.vals.clear();
+    p.ncols = nc;
     p.row_start.push(0);
     for i in 0..n {
         let begin = p.cols.len();
@@ -94,5 +94,4 @@ pub(super) fn smoothed_prolongator(
         }
         p.row_start.push(p.cols.len());
     }
-    p
 }

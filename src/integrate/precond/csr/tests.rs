@@ -88,7 +88,9 @@ fn split_products_are_the_serial_ones() {
         .collect();
     assert_eq!(split, serial);
     let product = a.matmul(&a, n);
-    let (lens, cols, vals) = a.matmul_rows(&a, n, 0..n);
+    let (mut part, mut cols, mut vals) = (Part::default(), Vec::new(), Vec::new());
+    a.matmul_rows(&a, n, 0..n, &mut part, (&mut cols, &mut vals));
+    let lens = part.lens;
     let ends: Vec<usize> = std::iter::once(0)
         .chain(lens.iter().scan(0, |e, l| {
             *e += l;
