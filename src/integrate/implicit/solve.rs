@@ -171,12 +171,20 @@ impl Implicit {
                 return self.hierarchy.as_mut().map(|h| &mut h.mg);
             }
         }
-        let mut fine = match self.hierarchy.as_mut() {
-            Some(h) => h.mg.take_finest(),
-            None => std::mem::take(&mut self.filtered),
+        // A fresh hierarchy, in the storage of the one it replaces.
+        let built = match self.hierarchy.take() {
+            Some(Hierarchy { mut mg, .. }) => {
+                let mut fine = mg.take_finest();
+                fine.filtered(a, filt);
+                Multigrid::build_reusing(fine, mg)
+            }
+            None => {
+                let mut fine = std::mem::take(&mut self.filtered);
+                fine.filtered(a, filt);
+                Multigrid::build(fine)
+            }
         };
-        fine.filtered(a, filt);
-        match Multigrid::build(fine) {
+        match built {
             Ok(mg) => {
                 if let Some(a) = self.a.as_mut() {
                     a.clear_edits();

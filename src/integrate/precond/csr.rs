@@ -306,17 +306,21 @@ impl Csr {
         }
     }
 
-    /// Value index of each row's diagonal block (rows sorted by column).
-    pub(super) fn diagonal_slots(&self, level: usize) -> Result<Vec<usize>, MultigridError> {
-        (0..self.rows())
-            .map(|r| {
-                let s = self.row_start[r];
-                self.cols[s..self.row_start[r + 1]]
-                    .binary_search(&(r as u32))
-                    .map(|k| s + k)
-                    .map_err(|_| MultigridError::MissingDiagonal { level, row: r })
-            })
-            .collect()
+    /// Value index of each row's diagonal block (rows sorted by column), into `out`.
+    pub(super) fn diagonal_slots_into(
+        &self,
+        level: usize,
+        out: &mut Vec<usize>,
+    ) -> Result<(), MultigridError> {
+        out.clear();
+        for r in 0..self.rows() {
+            let s = self.row_start[r];
+            let k = self.cols[s..self.row_start[r + 1]]
+                .binary_search(&(r as u32))
+                .map_err(|_| MultigridError::MissingDiagonal { level, row: r })?;
+            out.push(s + k);
+        }
+        Ok(())
     }
 
     pub(super) fn diagonal_blocks(&self, level: usize) -> Result<Vec<M3>, MultigridError> {

@@ -56,6 +56,12 @@ impl Multigrid {
         Self::construct(a, None, Vec::new(), Products::default())
     }
 
+    /// [`Multigrid::build`] computing into `old`'s storage (a hierarchy aged out: the new one
+    /// is about as large).
+    pub fn build_reusing(a: Csr, old: Multigrid) -> Result<Multigrid, MultigridError> {
+        Self::construct(a, None, old.levels, old.products)
+    }
+
     /// Rebuilds the hierarchy for `a` (same size) with the last build's aggregates and
     /// prolongator damping: new prolongator values and Galerkin products, but no aggregation
     /// and no spectral-radius estimate. For a cloth that rotates, the coarse levels follow its
@@ -84,11 +90,17 @@ impl Multigrid {
         if a.rows() == 0 {
             return Err(MultigridError::Empty);
         }
-        let mut levels = vec![Level::new(a, 0)?];
+        // The old levels' prolongators and their transposes by depth, the rest of each old
+        // level the storage of the new one at its depth.
+        let mut old = old.into_iter();
+        let mut old_p: Vec<(Csr, Csr)> = Vec::new();
+        let mut next_old = |old_p: &mut Vec<(Csr, Csr)>| {
+            let mut l = old.next().unwrap_or_default();
+            old_p.push((std::mem::take(&mut l.p), std::mem::take(&mut l.pt)));
+            l
+        };
+        let mut levels = vec![Level::reusing(a, 0, next_old(&mut old_p))?];
         let mut coarsening = Vec::new();
-        // The old levels' prolongators, their transposes and matrices, by depth.
-        let (mut old_p, mut old_a): (Vec<(Csr, Csr)>, Vec<Csr>) =
-            old.into_iter().map(|l| ((l.p, l.pt), l.a)).unzip();
         let mut plan = plan.map(Vec::into_iter);
         while levels.len() < MAX_LEVELS {
             let depth = levels.len() - 1;
@@ -113,41 +125,25 @@ impl Multigrid {
                 }
             };
             let nc = step.nc;
-            let (mut p, mut pt) = old_p.get_mut(depth).map(std::mem::take).unwrap_or_default();
-            let mut coarse = old_a
-                .get_mut(depth + 1)
-                .map(std::mem::take)
-                .unwrap_or_default();
+            let mut storage = next_old(&mut old_p);
+            let (mut p, mut pt) = std::mem::take(&mut old_p[depth]);
+            let mut coarse = std::mem::take(&mut storage.a);
             if products.ap.len() <= depth {
                 products.ap.resize_with(depth + 1, Csr::default);
             }
             let ap = &mut products.ap[depth];
             let marker = &mut products.marker;
-            let t0 = std::time::Instant::now();
             smoothed_prolongator(
                 &fine.a, &fine.dinv, &step.agg, nc, step.omega, &mut p, marker,
             );
-            let t1 = std::time::Instant::now();
             p.transpose_into(nc, &mut pt);
-            let t2 = std::time::Instant::now();
             fine.a.matmul_into(&p, nc, ap, &mut products.parts);
-            let t3 = std::time::Instant::now();
             pt.matmul_into(ap, nc, &mut coarse, &mut products.parts);
-            let t4 = std::time::Instant::now();
-            if std::env::var("PT").is_ok() {
-                eprintln!(
-                    "L{depth} p {:.3} t {:.3} ap {:.3} ptap {:.3}",
-                    (t1 - t0).as_secs_f64() * 1e3,
-                    (t2 - t1).as_secs_f64() * 1e3,
-                    (t3 - t2).as_secs_f64() * 1e3,
-                    (t4 - t3).as_secs_f64() * 1e3
-                );
-            }
             fine.p = p;
             fine.pt = pt;
             coarsening.push(step);
             let level = levels.len();
-            levels.push(Level::new(coarse, level)?);
+            levels.push(Level::reusing(coarse, level, storage)?);
         }
         // A dense factor where coarsening reached its target, or stalled below a coarse level.
         // Not when it stalled at the finest level: there the matrix has no strong connections
@@ -197,16 +193,14 @@ impl Multigrid {
             "finest matrix is not square or has another size"
         );
         a.sort_rows();
-        let diag = a.diagonal_slots(0)?;
-        let dinv = invert_diagonal(&a, 0)?;
         let l0 = &mut self.levels[0];
+        a.diagonal_slots_into(0, &mut l0.diag)?;
+        invert_diagonal(&a, &l0.diag, 0, &mut l0.dinv)?;
         match l0.halves.as_mut() {
             Some(h) if h.x_old.len() == a.rows() => h.find_split(&a),
             _ => l0.halves = Halves::new(&a),
         }
         l0.a = a;
-        l0.diag = diag;
-        l0.dinv = dinv;
         Ok(())
     }
 
@@ -228,7 +222,7 @@ impl Multigrid {
             Some(moved) => {
                 if moved {
                     // Rows moved in the arrays: the diagonal's slots and the halves' cuts anew.
-                    l0.diag = l0.a.diagonal_slots(0)?;
+                    l0.a.diagonal_slots_into(0, &mut l0.diag)?;
                     if let Some(h) = l0.halves.as_mut() {
                         h.find_split(&l0.a);
                     }

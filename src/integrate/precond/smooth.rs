@@ -51,7 +51,7 @@ impl Halves {
     }
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(super) struct Level {
     /// The level's matrix, rows sorted by column.
     pub(super) a: Csr,
@@ -70,14 +70,35 @@ pub(super) struct Level {
 }
 
 impl Level {
-    pub(super) fn new(mut a: Csr, level: usize) -> Result<Level, MultigridError> {
+    /// A level for `a`, its vectors in `old`'s storage (a rebuild's levels replace ones of
+    /// about the same size; `Level::default()` for none).
+    pub(super) fn reusing(mut a: Csr, level: usize, old: Level) -> Result<Level, MultigridError> {
         let n = a.rows();
         // The sweeps index `x` (n rows) by column unchecked.
         assert_eq!(a.ncols, n, "multigrid level {level} is not square");
         a.sort_rows();
-        let diag = a.diagonal_slots(level)?;
-        let dinv = invert_diagonal(&a, level)?;
-        let halves = Halves::new(&a);
+        let Level {
+            mut diag,
+            mut dinv,
+            halves,
+            mut x,
+            mut b,
+            mut r,
+            ..
+        } = old;
+        a.diagonal_slots_into(level, &mut diag)?;
+        invert_diagonal(&a, &diag, level, &mut dinv)?;
+        let halves = match halves {
+            Some(mut h) if h.x_old.len() == n => {
+                h.find_split(&a);
+                Some(h)
+            }
+            _ => Halves::new(&a),
+        };
+        for v in [&mut x, &mut b, &mut r] {
+            v.clear();
+            v.resize(n, V3::ZERO);
+        }
         Ok(Level {
             a,
             diag,
@@ -85,9 +106,9 @@ impl Level {
             halves,
             p: Csr::default(),
             pt: Csr::default(),
-            x: vec![V3::ZERO; n],
-            b: vec![V3::ZERO; n],
-            r: vec![V3::ZERO; n],
+            x,
+            b,
+            r,
         })
     }
 
@@ -97,7 +118,7 @@ impl Level {
         let (a, x, b, dinv) = (&self.a, &mut self.x, &self.b, &self.dinv);
         let mut sweep = |i: usize| {
             let (cols, vals) = a.row(i);
-            // SAFETY: the level is square (`Level::new`) and `x` has its rows.
+            // SAFETY: the level is square (`Level::reusing`) and `x` has its rows.
             let s = b[i] - unsafe { row_dot(cols, vals, x) };
             x[i] += dinv[i] * s;
         };
@@ -225,12 +246,20 @@ impl Level {
     }
 }
 
-pub(super) fn invert_diagonal(a: &Csr, level: usize) -> Result<Vec<M3>, MultigridError> {
-    let diag = a.diagonal_blocks(level)?;
-    diag.iter()
-        .enumerate()
-        .map(|(row, d)| invert_block(*d).ok_or(MultigridError::SingularDiagonal { level, row }))
-        .collect()
+/// The inverses of `a`'s diagonal blocks (at `diag`) into `out`.
+pub(super) fn invert_diagonal(
+    a: &Csr,
+    diag: &[usize],
+    level: usize,
+    out: &mut Vec<M3>,
+) -> Result<(), MultigridError> {
+    out.clear();
+    for (row, &slot) in diag.iter().enumerate() {
+        out.push(
+            invert_block(a.vals[slot]).ok_or(MultigridError::SingularDiagonal { level, row })?,
+        );
+    }
+    Ok(())
 }
 
 /// The inverse of a diagonal block, `None` unless it is positive definite enough to invert.
