@@ -123,12 +123,6 @@ impl Implicit {
                 let rebuild = if short { history } else { h.rebuild };
                 // An active-set round's refits and releases change a few rows: only those are
                 // refiltered when nothing else changed since the last filtering.
-                if std::env::var("DRAPE_PROBE_RF").is_ok() {
-                    eprintln!(
-                        "RQ edited={:?} rebuild={rebuild}",
-                        a.edited_rows().map(|r| r.len())
-                    );
-                }
                 let refiltered = match a.edited_rows() {
                     Some(edited) if !rebuild => h.mg.refilter_finest(a, filt, edited),
                     _ => Ok(false),
