@@ -95,6 +95,20 @@ pub(crate) fn constraints(n: usize, rng: &mut Rng) -> (Vec<Filter>, Vec<Vec3>) {
     (filt, z)
 }
 
+/// Every `period`-th row (from `offset`) held along `normal` (a contact's `Direction`), the
+/// others free.
+pub(crate) fn held_every(n: usize, period: usize, offset: usize, normal: Vec3) -> Vec<Filter> {
+    (0..n)
+        .map(|i| {
+            if i % period == offset {
+                Filter::Direction(normal)
+            } else {
+                Filter::Free
+            }
+        })
+        .collect()
+}
+
 /// The 12x12 cloth system with [`constraints`], a random right-hand side and its solution to
 /// 1e-13: `(a, filt, z, b, x)`. `rng` goes on for the caller's own draws.
 pub(crate) fn solved_cloth(

@@ -163,12 +163,7 @@ fn weak_positive_couplings_are_lumped_and_translations_kept() {
 fn refiltering_changed_rows_is_the_full_pass() {
     let mut a = crate::integrate::test_systems::cloth_system(24);
     let n = a.rows();
-    let mut filter: Vec<Filter> = (0..n)
-        .map(|i| match i % 11 {
-            4 => Filter::Direction(Vec3::new(0.0, 0.6, 0.8)),
-            _ => Filter::Free,
-        })
-        .collect();
+    let mut filter = crate::integrate::test_systems::held_every(n, 11, 4, Vec3::new(0.0, 0.6, 0.8));
     let mut inc = Csr::default();
     inc.filtered(&a, &filter);
     a.clear_edits();
