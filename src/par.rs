@@ -245,6 +245,16 @@ impl<A: Halve, B: Halve, C: Halve, D: Halve> Halve for (A, B, C, D) {
     }
 }
 
+/// `pass` over `data`, `n` elements long: in two halves on two threads from `from` elements on,
+/// one pass below (element-wise passes, whose results do not depend on the cut).
+pub(crate) fn in_halves<D: Halve + Send>(n: usize, from: usize, data: D, pass: impl Fn(D) + Sync) {
+    if n < from {
+        return pass(data);
+    }
+    let (a, b) = data.halve(n / 2);
+    join(|| pass(a), || pass(b));
+}
+
 /// `pass` over `data`, `n` rows long: in two halves on two threads from [`PAR_VERTICES`] rows
 /// on, one pass below; returns the halves' results added (the first half's plus the second's),
 /// so a sum depends on `n` only, never on which thread ran what.

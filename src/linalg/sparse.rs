@@ -3,6 +3,7 @@
 //! The pattern is fixed when the simulation is built (from the pairs every effect couples), so
 //! assembling a step only overwrites values; no allocation happens per step.
 
+use crate::par::in_halves;
 use crate::{Mat3, Vec3};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard};
@@ -17,19 +18,6 @@ const PAR_ROWS: usize = 512;
 /// Blocks from which an element-wise pass over a matrix's values (`assign`, `axpby`) runs in two
 /// halves on the pool: a 64x64 cloth's ~40k blocks are 2.8 MB a pass.
 const PAR_BLOCKS: usize = 8 * 1024;
-
-/// `pass(own, other)` over `own` and the same elements of `other` (as long as `own`), in two
-/// halves on two threads for large matrices; each element's result is the serial one.
-fn in_halves(own: &mut [Mat3], other: &[Mat3], pass: impl Fn(&mut [Mat3], &[Mat3]) + Sync) {
-    let other = &other[..own.len()];
-    if own.len() < PAR_BLOCKS {
-        return pass(own, other);
-    }
-    let mid = own.len() / 2;
-    let (a, b) = own.split_at_mut(mid);
-    let (oa, ob) = other.split_at(mid);
-    crate::par::join(|| pass(a, oa), || pass(b, ob));
-}
 
 /// Collects the vertex pairs a set of effects couples.
 #[derive(Debug, Default, Clone)]
@@ -229,7 +217,9 @@ impl BlockCsr {
     pub fn assign(&mut self, other: &BlockCsr) {
         debug_assert_eq!(self.cols.len(), other.cols.len());
         if !(self.zero && other.zero) {
-            in_halves(&mut self.vals, &other.vals, |s, o| s.copy_from_slice(o));
+            let n = self.vals.len();
+            let data = (&mut self.vals[..], &other.vals[..n]);
+            in_halves(n, PAR_BLOCKS, data, |(s, o)| s.copy_from_slice(o));
         }
         self.zero = other.zero;
         self.edits.everything();
@@ -257,20 +247,14 @@ impl BlockCsr {
     /// Sets `self = a * self + b * other` (same pattern).
     pub fn axpby(&mut self, a: f64, b: f64, other: &BlockCsr) {
         debug_assert_eq!(self.cols.len(), other.cols.len());
+        let n = self.vals.len();
         if other.zero {
-            let vals = &mut self.vals;
-            if vals.len() < PAR_BLOCKS {
-                vals.iter_mut().for_each(|s| *s *= a);
-            } else {
-                let mid = vals.len() / 2;
-                let (x, y) = vals.split_at_mut(mid);
-                crate::par::join(
-                    || x.iter_mut().for_each(|s| *s *= a),
-                    || y.iter_mut().for_each(|s| *s *= a),
-                );
-            }
+            in_halves(n, PAR_BLOCKS, &mut self.vals[..], |s| {
+                s.iter_mut().for_each(|s| *s *= a)
+            });
         } else {
-            in_halves(&mut self.vals, &other.vals, |s, o| {
+            let data = (&mut self.vals[..], &other.vals[..n]);
+            in_halves(n, PAR_BLOCKS, data, |(s, o)| {
                 for (s, o) in s.iter_mut().zip(o) {
                     *s = *s * a + *o * b;
                 }
