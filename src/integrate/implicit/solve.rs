@@ -166,17 +166,14 @@ impl Implicit {
             }
         }
         // A fresh hierarchy, in the storage of the one it replaces.
-        let built = match self.hierarchy.take() {
-            Some(Hierarchy { mut mg, .. }) => {
-                let mut fine = mg.take_finest();
-                fine.filtered(a, filt);
-                Multigrid::build_reusing(fine, mg)
-            }
-            None => {
-                let mut fine = std::mem::take(&mut self.filtered);
-                fine.filtered(a, filt);
-                Multigrid::build(fine)
-            }
+        let (mut fine, old) = match self.hierarchy.take() {
+            Some(Hierarchy { mut mg, .. }) => (mg.take_finest(), Some(mg)),
+            None => (std::mem::take(&mut self.filtered), None),
+        };
+        fine.filtered(a, filt);
+        let built = match old {
+            Some(mg) => Multigrid::build_reusing(fine, mg),
+            None => Multigrid::build(fine),
         };
         match built {
             Ok(mg) => {

@@ -196,10 +196,7 @@ impl Multigrid {
         let l0 = &mut self.levels[0];
         a.diagonal_slots_into(0, &mut l0.diag)?;
         invert_diagonal(&a, &l0.diag, 0, &mut l0.dinv)?;
-        match l0.halves.as_mut() {
-            Some(h) if h.x_old.len() == a.rows() => h.find_split(&a),
-            _ => l0.halves = Halves::new(&a),
-        }
+        l0.halves = Halves::refit(l0.halves.take(), &a);
         l0.a = a;
         Ok(())
     }

@@ -40,6 +40,18 @@ impl Halves {
         Some(h)
     }
 
+    /// The halves for `a`: `old`'s storage with its cuts recomputed when it has `a`'s size,
+    /// else new ones (or none for a small level).
+    pub(super) fn refit(old: Option<Halves>, a: &Csr) -> Option<Halves> {
+        match old {
+            Some(mut h) if h.x_old.len() == a.rows() => {
+                h.find_split(a);
+                Some(h)
+            }
+            _ => Halves::new(a),
+        }
+    }
+
     /// Recomputes the cut positions for a matrix of the same size.
     pub(super) fn find_split(&mut self, a: &Csr) {
         let mid = self.mid;
@@ -88,13 +100,7 @@ impl Level {
         } = old;
         a.diagonal_slots_into(level, &mut diag)?;
         invert_diagonal(&a, &diag, level, &mut dinv)?;
-        let halves = match halves {
-            Some(mut h) if h.x_old.len() == n => {
-                h.find_split(&a);
-                Some(h)
-            }
-            _ => Halves::new(&a),
-        };
+        let halves = Halves::refit(halves, &a);
         for v in [&mut x, &mut b, &mut r] {
             v.clear();
             v.resize(n, V3::ZERO);
