@@ -125,7 +125,10 @@ const EXPECTED: &[(&str, u64)] = &[
     ("hanging64_explicit_all", 0x853b7152ec85c602),
     ("hanging48_rk4_all", 0xb15148c1b6b7144f),
     ("hanging32_symplectic_subdivided", 0x7aee1c713d3069ea),
-    ("sphere32_symplectic_contact", 0x83591e2ae291daf1),
+    // Re-recorded when the obstacle response's friction came to move a vertex that arrived
+    // during the step by its velocity change over the part of the step in contact only
+    // (`collide/respond.rs`, `contact_share`).
+    ("sphere32_symplectic_contact", 0x4a6a92fe48dc88ce),
 ];
 
 /// Runs a case; returns the hash of the final positions and velocities, the per-step kinetic
