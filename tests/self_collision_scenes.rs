@@ -202,10 +202,11 @@ fn cape_at_twice_the_resolution_throws_no_vertex() {
 /// the frame end shows. The repulsion of a layer landing on the one on the ground pushed a
 /// vertex of it 2.7 mm below the ground (14x14) while the metric, measured on the vertex pass's
 /// contacts only, said 0; the stage now tests the vertices self-contact moved against the
-/// obstacles again and measures them.
+/// obstacles again and measures them. At 30x30 a vertex held on the ground, pushed by the layer
+/// above, ended a frame 0.08 mm below it: those are tested again too.
 #[test]
 fn a_heap_stays_above_the_ground_and_its_penetration_is_reported() {
-    for res in [14, 24, 32] {
+    for res in [14, 24, 30, 32] {
         let mut scene = bundled("crumple.yaml", 1);
         scene.cloths[0].grid.resolution = [res, res];
         let th = scene.cloths[0].material.thickness;
