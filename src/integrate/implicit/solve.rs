@@ -9,12 +9,28 @@ use crate::integrate::precond::Multigrid;
 use crate::linalg::Filter;
 use crate::Vec3;
 
+/// Which of a step's solves (see `step.rs`): it decides the start directions and what the
+/// multigrid hierarchy gets before the iterations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum SolveKind {
+    /// The step's first solve: `dv` holds the last step's velocity change and `older` the one
+    /// before, both start directions; its iteration count drives the rebuild schedule.
+    First,
+    /// A re-solve after an active-set round or the polish, from the current answer (`dv`): the
+    /// matrix changed in the rows the round refitted.
+    Round,
+    /// A Newton correction, from zero, on the matrix assembled at the iterate: its coarse
+    /// levels are rebuilt along the kept aggregates. On the step's own (at its start state),
+    /// the corrections of S1 64x64's landing (`cargo bench --bench contact`: stiff springs
+    /// turned by the impact, nine steps) took 64-146 iterations to 1e-5, 225 ms of the run;
+    /// on rebuilt ones 11-33 (a rebuild costs about ten).
+    Newton,
+}
+
 impl Implicit {
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start). A start that meets
     /// `tol` already (an active-set round that moved the answer less than that) returns at once:
     /// no preconditioner update, and the rebuild schedule counts only solves that iterate.
-    /// `history`: `dv` holds the last step's velocity change and `older` the one before, both
-    /// start directions (else `dv` alone).
     ///
     /// A split or subdivided step (`short_step`) keeps the last full step's aggregates (see
     /// [`Self::update_hierarchy`]) and stays out of the rebuild schedule. Aggregated afresh,
@@ -27,9 +43,10 @@ impl Implicit {
     /// ms but S1 64x64, whose splits land the cloth on the ball, from 108 to 247 CG iterations
     /// per frame (171 for quarter steps and shorter); the last full step's coarse levels as
     /// they were, 81 ms.
-    pub(super) fn solve(&mut self, filt: &[Filter], history: bool, tol: f64) -> SolveStats {
+    pub(super) fn solve(&mut self, filt: &[Filter], kind: SolveKind, tol: f64) -> SolveStats {
         let max_it = self.settings.cg_max_iterations;
         let short = self.short_step;
+        let history = kind == SolveKind::First;
         if history && !short {
             if let Some(h) = self.hierarchy.as_mut() {
                 h.rebuild |= h.filter_changed(filt);
@@ -44,7 +61,7 @@ impl Implicit {
             // than the tolerance): no preconditioner update, and nothing for the schedule.
             return done;
         }
-        let use_mg = self.update_hierarchy(filt, short, history).is_some();
+        let use_mg = self.update_hierarchy(filt, short, kind).is_some();
         let Some(a) = self.a.as_ref() else {
             unreachable!("prepared by the step");
         };
@@ -101,13 +118,14 @@ impl Implicit {
     /// (multigrid disabled or its setup failed).
     ///
     /// A short step (`short`: split or subdivided) gets coarse values along the last full step's
-    /// aggregates at its first solve (`history`), the finest level alone at its re-solves, and
-    /// leaves the schedule as it was, with a rebuild due at the next full step.
+    /// aggregates at its first solve, the finest level alone at its re-solves, and leaves the
+    /// schedule as it was, with a rebuild due at the next full step. A Newton correction gets
+    /// coarse values for its matrix in either (see [`SolveKind::Newton`]).
     pub(super) fn update_hierarchy(
         &mut self,
         filt: &[Filter],
         short: bool,
-        history: bool,
+        kind: SolveKind,
     ) -> Option<&mut Multigrid> {
         if self.preconditioner != Preconditioner::Multigrid {
             return None;
@@ -120,7 +138,12 @@ impl Implicit {
             .is_some_and(|h| h.mg.rows() == n && h.age < REBUILD_EVERY);
         if reuse {
             if let Some(h) = self.hierarchy.as_mut() {
-                let rebuild = if short { history } else { h.rebuild };
+                let rebuild = kind == SolveKind::Newton
+                    || if short {
+                        kind == SolveKind::First
+                    } else {
+                        h.rebuild
+                    };
                 // An active-set round's refits and releases change a few rows: only those are
                 // refiltered when nothing else changed since the last filtering.
                 let refiltered = match a.edited_rows() {

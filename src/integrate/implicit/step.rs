@@ -4,6 +4,7 @@
 //! iterations while the step creates energy.
 
 use super::newton::potential;
+use super::solve::SolveKind;
 use super::solver::Implicit;
 use crate::effects::State;
 use crate::integrate::cg::SolveStats;
@@ -93,7 +94,7 @@ impl Implicit {
         } else {
             tight
         };
-        let mut stats = self.solve(filt, true, tol);
+        let mut stats = self.solve(filt, SolveKind::First, tol);
         tally(report, &stats);
         std::mem::swap(&mut self.older, &mut self.last);
         let mut cg_iterations = stats.iterations;
@@ -113,7 +114,7 @@ impl Implicit {
             } else {
                 break;
             }
-            stats = self.solve(filt, false, tol);
+            stats = self.solve(filt, SolveKind::Round, tol);
             tally(report, &stats);
             cg_iterations += stats.iterations;
             impulses_current = false;
@@ -175,7 +176,7 @@ impl Implicit {
             scratch(&mut self.dv, n);
             self.dv.fill(Vec3::ZERO);
             self.z.fill(Vec3::ZERO);
-            stats = self.solve(filt, false, tight);
+            stats = self.solve(filt, SolveKind::Newton, tight);
             tally(report, &stats);
             cg_iterations += stats.iterations;
             for (total, c) in self.delta.iter_mut().zip(&self.dv) {
