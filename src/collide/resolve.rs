@@ -4,7 +4,7 @@
 //! obstacles again, then its CCD again), then the penetration metric.
 
 use super::contact::Contact;
-use super::exit::exit_of;
+use super::exit::{exit_of, is_exiting};
 use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
@@ -187,11 +187,8 @@ impl CollisionStage {
         for _ in 1..SELF_OBSTACLE_ROUNDS {
             moved.clear();
             let exits = &self.exits;
-            let exiting = |i: usize| {
-                let k = exits.partition_point(|e| (e.vertex as usize) < i);
-                exits.get(k).is_some_and(|e| e.vertex as usize == i)
-            };
-            moved.extend((0..n).map(|i| x1[i] != mark[i] && !(self.in_contact[i] && exiting(i))));
+            let led_out = |i: usize| self.in_contact[i] && is_exiting(exits, i);
+            moved.extend((0..n).map(|i| x1[i] != mark[i] && !led_out(i)));
             if !moved.iter().any(|&m| m) {
                 break;
             }

@@ -96,7 +96,6 @@ pub(crate) fn obstacle_vertex(
         }
     }
     let (q, n_local) = contact?;
-    let in_contact = contact_share(a, p_solved, q, n_local, th);
 
     let h = inp.h;
     let n = o.pose.transform_vector(n_local);
@@ -134,7 +133,8 @@ pub(crate) fn obstacle_vertex(
     *v = surface_velocity + vt_new + n * vn.max(0.0);
     if inp.response.projects_tangent() {
         // Friction acted during the part of the step in contact: move the end point by that.
-        *x += (vt_new - vt) * (h * in_contact);
+        let share = contact_share(a, p_solved, q, n_local, th);
+        *x += (vt_new - vt) * (h * share);
     }
     Some(Contact {
         vertex: inp.vertex,
