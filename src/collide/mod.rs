@@ -44,7 +44,7 @@ pub use obstacle::{Obstacle, ObstacleError};
 pub use overlap::Overlap;
 pub use report::CollisionReport;
 pub use resolve::{ContactKind, StageRollback};
-pub use self_contact::SelfContactReport;
+pub use self_contact::{SelfContactReport, SelfTouch};
 pub use settings::{CollisionSettings, DetectionMode, ResponseMode};
 pub use spec::{
     validate_obstacles, BuildError, CollisionSpec, MotionSpec, ObstacleSpec, PoseSpec, ShapeSpec,

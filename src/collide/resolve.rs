@@ -9,7 +9,7 @@ use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex};
 use super::report::CollisionReport;
-use super::self_contact::{SelfCollider, SelfOutcome};
+use super::self_contact::{SelfCollider, SelfOutcome, SelfTouch};
 use super::stage::CollisionStage;
 use super::wedge::separate_wedged;
 use crate::{Pose, Vec3};
@@ -216,6 +216,16 @@ impl CollisionStage {
             out.report.obstacle_retests += 1;
             out.unresolved = again.unresolved;
         }
+        // The layers resting on each other now: this substep's, and the last one's still over
+        // their faces (see `SelfTouch`).
+        let mut touches = std::mem::take(&mut self.touches_next);
+        super::self_contact::refresh_touches(
+            sc.touches(),
+            &self.self_touches,
+            &x1[..n],
+            &mut touches,
+        );
+        self.touches_next = std::mem::replace(&mut self.self_touches, touches);
         // What the penetration metric measures besides the contacts: every vertex moved here.
         moved.clear();
         moved.extend((0..n).map(|i| x1[i] != before[i]));
@@ -300,6 +310,7 @@ pub struct StageRollback {
     poses: Vec<(Pose, Pose)>,
     contacts: Vec<Contact>,
     feature_contacts: Vec<FeatureContact>,
+    self_touches: Vec<SelfTouch>,
 }
 
 /// Which of the stage's passes moved a cloth vertex in the last `resolve`.
@@ -331,6 +342,7 @@ impl CollisionStage {
             .extend(self.obstacles.iter().map(|o| (o.pose_prev, o.pose)));
         s.contacts.clone_from(&self.contacts);
         s.feature_contacts.clone_from(&self.feature_contacts);
+        s.self_touches.clone_from(&self.self_touches);
     }
 
     /// Moves the feature contacts of obstacles that move in the coming substep to where their
@@ -354,6 +366,7 @@ impl CollisionStage {
         }
         self.contacts.clone_from(&s.contacts);
         self.feature_contacts.clone_from(&s.feature_contacts);
+        self.self_touches.clone_from(&s.self_touches);
     }
 
     /// The pass of the last `resolve` that moved `vertex`, if one did (the feature pass first:

@@ -9,7 +9,7 @@ use super::error::StageError;
 use super::exit::Exit;
 use super::features::{FeatureCollider, FeatureContact, Features};
 use super::obstacle::Obstacle;
-use super::self_contact::SelfCollider;
+use super::self_contact::{SelfCollider, SelfTouch};
 use super::settings::CollisionSettings;
 use crate::{Pose, Vec3};
 
@@ -35,6 +35,10 @@ pub struct CollisionStage {
     pub(super) round_start: Vec<Vec3>,
     pub(super) self_moved: Vec<bool>,
     pub(super) self_collider: Option<SelfCollider>,
+    /// The layers resting on each other at the end of the last `resolve`, sorted by (vertex,
+    /// triangle), and a buffer for the next (see [`SelfTouch`]).
+    pub(super) self_touches: Vec<SelfTouch>,
+    pub(super) touches_next: Vec<SelfTouch>,
     /// Per-obstacle edge/corner features and the cloth topology they are tested against.
     pub(super) features: Vec<Features>,
     pub(super) feature_collider: FeatureCollider,
@@ -123,6 +127,8 @@ impl CollisionStage {
             round_start: Vec::new(),
             self_moved: Vec::new(),
             self_collider,
+            self_touches: Vec::new(),
+            touches_next: Vec::new(),
             culling: true,
             near: Vec::new(),
             exits: Vec::new(),
@@ -164,6 +170,13 @@ impl CollisionStage {
     /// edges, for the implicit solver to hold as springs next substep.
     pub fn feature_contacts(&self) -> &[FeatureContact] {
         &self.feature_contacts
+    }
+
+    /// The last `resolve`'s pairs of cloth layers resting on each other (a vertex over a face of
+    /// another layer), for the implicit solver to hold apart next substep; empty without
+    /// self-collision.
+    pub fn self_touches(&self) -> &[SelfTouch] {
+        &self.self_touches
     }
 
     /// Coulomb coefficient between `vertex` and obstacle `obstacle` (the obstacle's own, else the

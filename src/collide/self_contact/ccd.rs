@@ -160,6 +160,7 @@ impl SelfCollider {
             dx: Vec3::ZERO,
             dv: Vec3::ZERO,
             residual: 1.0,
+            layers: None,
         };
         if !correct {
             return none;
@@ -186,6 +187,7 @@ impl SelfCollider {
             dx: n * (gap - d1),
             dv: if vn < 0.0 { n * -vn } else { Vec3::ZERO },
             residual: 1.0,
+            layers: None,
         }
     }
 }

@@ -7,6 +7,7 @@ use super::jacobi::{Correction, JacobiPass, Keyed};
 use super::report::SelfContactReport;
 use super::rest::RestShape;
 use super::stencil::Stencil;
+use super::touch::SelfTouch;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
 use crate::collide::ring::one_ring;
 use crate::Vec3;
@@ -40,6 +41,8 @@ pub(crate) struct SelfCollider {
     /// in order with the near pairs' (`proximity::near_answers`).
     pub(super) found_vt: Vec<Keyed>,
     pub(super) found_near: Vec<Keyed>,
+    /// The pairs of two layers this substep's repulsion answered (see [`super::SelfTouch`]).
+    pub(super) touches: Vec<SelfTouch>,
     pub(super) w: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
@@ -69,6 +72,11 @@ pub(super) fn ee_vertices(edges: &[[u32; 2]], e: u32, f: u32) -> [u32; 4] {
 }
 
 impl SelfCollider {
+    /// The pairs of two layers the last `resolve`'s repulsion answered.
+    pub fn touches(&self) -> &[SelfTouch] {
+        &self.touches
+    }
+
     pub fn new(triangles: &[[u32; 3]], n_vertices: usize) -> Self {
         let mut edges: Vec<[u32; 2]> = triangles
             .iter()
@@ -98,6 +106,7 @@ impl SelfCollider {
             pairs_ee: Vec::new(),
             found_vt: Vec::new(),
             found_near: Vec::new(),
+            touches: Vec::new(),
             w: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),

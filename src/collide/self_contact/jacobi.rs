@@ -76,6 +76,9 @@ pub(super) struct Correction {
     pub dv: Vec3,
     /// How far short of its target the pair is, as a fraction of its contact distance.
     pub residual: f64,
+    /// A vertex-triangle pair of two layers: the face normal towards the vertex and the
+    /// contact distance (see [`super::SelfTouch`]).
+    pub layers: Option<(Vec3, f64)>,
 }
 
 /// Averaged position and velocity corrections of one pass.

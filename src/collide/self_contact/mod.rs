@@ -20,7 +20,7 @@
 //! file (`proximity`, `ccd`, `intersections`), `jacobi` (a pass's corrections averaged per
 //! vertex), `changed` (the pairs a pass can skip: none of their vertices changed), `zones`
 //! (the impact-zone fail-safe), `resolve` (their order per detection mode), `report` (its
-//! counts).
+//! counts), `touch` (the layers resting on each other, which the solver holds next substep).
 
 mod bvh;
 mod ccd;
@@ -35,8 +35,11 @@ mod report;
 mod resolve;
 mod rest;
 mod stencil;
+mod touch;
 mod zones;
 
 pub(crate) use collider::SelfCollider;
 pub use report::SelfContactReport;
 pub(crate) use resolve::SelfOutcome;
+pub(crate) use touch::refresh as refresh_touches;
+pub use touch::SelfTouch;

@@ -7,6 +7,7 @@ use super::exempt::across_seam;
 use super::jacobi::{Correction, Keyed};
 use super::rest::FOLD_ARC;
 use super::stencil::Stencil;
+use super::touch::SelfTouch;
 use crate::collide::narrow;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -84,9 +85,7 @@ impl SelfCollider {
             let (xr, vr): (&[Vec3], &[Vec3]) = (x1, v1);
             let flags = since.map(|_| this.rep_changed.flags());
             let anew = |idx: &[u32]| flags.is_none_or(|f| any_of(f, idx));
-            let answer = |c: Option<(Stencil, Vec3, f64)>| {
-                c.and_then(|(st, n, gap)| this.repel(&st, n, gap, xr, vr, friction))
-            };
+            let answer = |c: Option<Close>| c.and_then(|c| this.repel(&c, xr, vr, friction));
             found_vt.clear();
             found_vt.par_extend(
                 pairs
@@ -123,6 +122,18 @@ impl SelfCollider {
         }
         if fresh {
             self.report.candidates += tested;
+        }
+        // Two layers resting on each other: for the solver to hold apart next substep.
+        for ((v, t), c) in found_vt.iter().chain(&found_near) {
+            if let Some((normal, gap)) = c.layers {
+                self.touches.push(SelfTouch {
+                    vertex: *v,
+                    triangle: self.triangles[*t as usize],
+                    bary: [-c.st.c[1], -c.st.c[2], -c.st.c[3]],
+                    normal,
+                    gap,
+                });
+            }
         }
         let mut pass = std::mem::take(&mut self.jacobi);
         for c in &found {
@@ -213,7 +224,7 @@ impl SelfCollider {
         x: &[Vec3],
         th: &[f64],
         vertex_vertex: bool,
-    ) -> Option<(Stencil, Vec3, f64)> {
+    ) -> Option<Close> {
         if vertex_vertex {
             let st = Stencil {
                 idx: [a, b, 0, 0],
@@ -221,7 +232,7 @@ impl SelfCollider {
                 len: 2,
             };
             let gap = st.gap(th);
-            return radial(st.eval(x), st.eval(x0), gap).map(|n| (st, n, gap));
+            return radial(st.eval(x), st.eval(x0), gap).map(|n| Close::across(st, n, gap));
         }
         let t = self.triangles[b as usize];
         let [pa, pb, pc] = t.map(|i| x[i as usize]);
@@ -244,14 +255,7 @@ impl SelfCollider {
     /// is rejected on squared distances alone when it is also near in the rest shape at its
     /// closest point (answered along that point's direction, below): beyond its contact
     /// distance, nothing. In-plane, the plane test of `vt_close` rejects none of them.
-    fn near_close(
-        &self,
-        a: u32,
-        b: u32,
-        x0: &[Vec3],
-        x: &[Vec3],
-        th: &[f64],
-    ) -> Option<(Stencil, Vec3, f64)> {
+    fn near_close(&self, a: u32, b: u32, x0: &[Vec3], x: &[Vec3], th: &[f64]) -> Option<Close> {
         let [pa, pb, pc] = self.triangles[b as usize].map(|i| x[i as usize]);
         let p = x[a as usize];
         let (q, bary) = narrow::point_triangle_closest(p, pa, pb, pc);
@@ -280,7 +284,7 @@ impl SelfCollider {
         x0: &[Vec3],
         x: &[Vec3],
         th: &[f64],
-    ) -> Option<(Stencil, Vec3, f64)> {
+    ) -> Option<Close> {
         let t = self.triangles[b as usize];
         let [pa, pb, pc] = t.map(|i| x[i as usize]);
         let p = x[a as usize];
@@ -299,7 +303,7 @@ impl SelfCollider {
             // 150 m/s in the gripper of robot_pick_towel. Skipping these pairs let the 2x
             // crumple stretch to 1.67. Nor is such a pair held farther apart than it is at rest.
             let gap = st.gap(th).min(rest_d);
-            return radial(p - q, st.eval(x0), gap).map(|n| (st, n, gap));
+            return radial(p - q, st.eval(x0), gap).map(|n| Close::across(st, n, gap));
         }
         let (e0, e1, e2) = (pb - pa, pc - pa, pc - pb);
         let max_edge2 = e0
@@ -350,20 +354,18 @@ impl SelfCollider {
         let n = if nf.dot(st.eval(x0)) >= 0.0 { nf } else { -nf };
         let dist = n.dot(st.eval(x));
         // Behind the face it started in front of: a crossing, CCD's (with the crossing's normal).
-        (dist >= 0.0 && dist < gap).then_some((st, n, gap))
+        (dist >= 0.0 && dist < gap).then_some(Close {
+            st,
+            n,
+            gap,
+            layers: true,
+        })
     }
 
     /// A close edge-edge pair at positions `x`, with the normal along the closest points'
     /// direction (perpendicular to both edges where the closest points are inside them),
     /// oriented to the side the pair was on at `x0`.
-    fn ee_close(
-        &self,
-        e1: u32,
-        e2: u32,
-        x0: &[Vec3],
-        x: &[Vec3],
-        th: &[f64],
-    ) -> Option<(Stencil, Vec3, f64)> {
+    fn ee_close(&self, e1: u32, e2: u32, x0: &[Vec3], x: &[Vec3], th: &[f64]) -> Option<Close> {
         let (a, b) = (self.edges[e1 as usize], self.edges[e2 as usize]);
         let (s, u, _, _) = narrow::segment_segment_closest(
             x[a[0] as usize],
@@ -373,7 +375,7 @@ impl SelfCollider {
         );
         let st = self.ee_stencil(e1, e2, s, u);
         let gap = st.gap(th);
-        radial(st.eval(x), st.eval(x0), gap).map(|n| (st, n, gap))
+        radial(st.eval(x), st.eval(x0), gap).map(|n| Close::across(st, n, gap))
     }
 
     /// The answer to a close pair: separation to its contact distance `gap` along `n` (the
@@ -381,13 +383,12 @@ impl SelfCollider {
     /// tangential part.
     fn repel(
         &self,
-        st: &Stencil,
-        n: Vec3,
-        gap: f64,
+        close: &Close,
         x1: &[Vec3],
         v1: &[Vec3],
         friction: &[f64],
     ) -> Option<Correction> {
+        let (st, n, gap) = (&close.st, close.n, close.gap);
         let dist = n.dot(st.eval(x1));
         if dist >= gap || st.inv_mass(&self.w) <= 0.0 {
             return None;
@@ -419,7 +420,30 @@ impl SelfCollider {
             dx: n * (gap - dist).min(cap),
             dv,
             residual: (gap - dist) / gap,
+            layers: close.layers.then_some((n, gap)),
         })
+    }
+}
+
+/// A close pair: its stencil, the normal its repulsion acts along (towards the side it started
+/// on), its contact distance, and whether it is two layers (a vertex over a face, along the
+/// face's normal), the pairs the solver holds apart next substep (`CollisionStage::self_touches`).
+struct Close {
+    st: Stencil,
+    n: Vec3,
+    gap: f64,
+    layers: bool,
+}
+
+impl Close {
+    /// A pair answered along its closest points' direction: not two layers.
+    fn across(st: Stencil, n: Vec3, gap: f64) -> Self {
+        Self {
+            st,
+            n,
+            gap,
+            layers: false,
+        }
     }
 }
 

@@ -43,6 +43,7 @@ impl SelfCollider {
         if first {
             // A new step (a new start state): no earlier CCD pass's answers carry over.
             self.ccd_changed.forget();
+            self.touches.clear();
         }
         if self.rest.is_none() {
             self.capture_rest(x0, thickness);
