@@ -3,6 +3,7 @@
 //! constraint set by the per-vertex filter `S`, started from the best combination of up to two
 //! guesses in the energy norm.
 
+use super::contact::OffPattern;
 use super::precond::Multigrid;
 use crate::linalg::{scratch, BlockCsr, Filter};
 use crate::par::sum_in_halves;
@@ -54,6 +55,8 @@ pub(crate) struct Pcg {
     /// `|S r|^2` and `|S b|^2` of the start (see [`Pcg::start`]).
     rnorm2: f64,
     bnorm2: f64,
+    /// Couplings of the system outside `A`'s pattern, added to every product with `A`.
+    pub extra: OffPattern,
 }
 
 impl Pcg {
@@ -108,6 +111,7 @@ impl Pcg {
         // r = S (b - A z): the residual of the start without the guess.
         if target {
             a.mul(dv, &mut self.q);
+            self.extra.add_product(dv, &mut self.q);
         } else {
             self.q.fill(Vec3::ZERO);
         }
@@ -122,6 +126,7 @@ impl Pcg {
         // worse than starting from zero, exact when the solution lies in the span.
         if guess {
             a.mul(&self.c, &mut self.q);
+            self.extra.add_product(&self.c, &mut self.q);
             let (mut gr, mut gag) = (0.0, 0.0);
             for i in 0..n {
                 self.q[i] = filt[i].apply(self.q[i]);
@@ -136,6 +141,7 @@ impl Pcg {
                     self.h[i] = filt[i].apply(second[i]);
                 }
                 a.mul(&self.h, &mut self.ah);
+                self.extra.add_product(&self.h, &mut self.ah);
                 let (mut hr, mut hah, mut gah) = (0.0, 0.0, 0.0);
                 for i in 0..n {
                     self.ah[i] = filt[i].apply(self.ah[i]);
@@ -242,6 +248,7 @@ impl Pcg {
         // The vector passes run in halves on two threads for large cloths (`sum_in_halves`).
         while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
             a.mul(&self.c, &mut self.q);
+            self.extra.add_product(&self.c, &mut self.q);
             let cq = sum_in_halves(n, (&mut self.q[..], &self.c[..], filt), |(q, c, filt)| {
                 let mut cq = 0.0;
                 for ((q, c), f) in q.iter_mut().zip(c).zip(filt) {

@@ -126,8 +126,8 @@ mod tests {
         let c = wave_speed(&cloth, middle);
         assert!(c.is_finite() && c > 0.0);
         let spring = ContactSpring {
-            verts: [middle as u32; 3],
-            weights: [1.0, 0.0, 0.0],
+            verts: [middle as u32; 4],
+            weights: [1.0, 0.0, 0.0, 0.0],
             normal: Vec3::Z,
             point: cloth.x[middle] - Vec3::Z * 1e-3,
             gap: 2e-3,

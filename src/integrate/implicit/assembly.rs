@@ -25,9 +25,11 @@ impl Implicit {
         a.add_diagonal(d.mass);
         friction::add_to_matrix(a, &self.drags, h);
         let n = s.x.len();
+        self.pcg.extra.clear();
         for c in &d.constraints.contacts {
             if c.is_valid(n) && c.depth(s.x) > 0.0 {
                 c.add_jacobian(a, h * h);
+                self.pcg.extra.push(c, a, h * h);
             }
         }
         for (k, g) in &self.edge_drags {
@@ -107,6 +109,23 @@ impl Implicit {
             c.add_point_block(a, g.damping(), h);
             c.add_point_force(g.force(u), h, &mut self.b);
             self.edge_drags.push((k, g));
+        }
+        self.off_pattern(d, h);
+    }
+}
+
+impl Implicit {
+    /// The active pair springs' couplings outside `A`'s pattern, for the PCG's products (see
+    /// [`crate::integrate::contact::OffPattern`]).
+    pub(super) fn off_pattern(&mut self, d: &Dynamics, h: f64) {
+        self.pcg.extra.clear();
+        let Some(a) = self.a.as_ref() else {
+            return;
+        };
+        for (c, active) in d.constraints.contacts.iter().zip(&self.spring_active) {
+            if *active {
+                self.pcg.extra.push(c, a, h * h);
+            }
         }
     }
 }

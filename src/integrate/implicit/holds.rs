@@ -20,6 +20,7 @@ impl Implicit {
             return;
         };
         a.mul(&self.dv, &mut self.impulses);
+        self.pcg.extra.add_product(&self.dv, &mut self.impulses);
         for i in 0..n {
             self.impulses[i] = filt[i].constrained(self.impulses[i] - self.b[i]);
         }

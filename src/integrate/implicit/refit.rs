@@ -59,6 +59,9 @@ impl Implicit {
                 changed = true;
             }
         }
+        if changed {
+            self.off_pattern(d, h);
+        }
         changed
     }
 
