@@ -91,6 +91,14 @@ pub trait Effect: Send + Sync {
         false
     }
 
+    /// The largest stretch, over rest length, that a linearisation of this effect at `x0` does
+    /// not see at `x1`: a spring's `|d1| - n0 . d1` (its length beyond the projection on its
+    /// direction at `x0`), which a spring turning by `a` gains as `a^2 / 2` of its length.
+    /// Default: none (effects without springs).
+    fn unseen_stretch(&self, _x0: &[Vec3], _x1: &[Vec3]) -> f64 {
+        0.0
+    }
+
     /// Stiffness bound, for the elastic effects.
     fn stiffness(&self, _mass: &[f64]) -> Option<StiffnessBound> {
         None

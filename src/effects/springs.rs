@@ -326,6 +326,23 @@ impl Effect for Springs {
             .sum()
     }
 
+    fn unseen_stretch(&self, x0: &[Vec3], x1: &[Vec3]) -> f64 {
+        let dir = |x: &[Vec3], s: &Spring| x[s.i as usize] - x[s.j as usize];
+        self.springs
+            .iter()
+            .filter(|s| s.rest > 0.0)
+            .map(|s| {
+                let (d0, d1) = (dir(x0, s), dir(x1, s));
+                // Coincident ends at `x0`: linearised isotropically, nothing turns unseen.
+                let n0 = d0.normalize_or_zero();
+                if n0 == Vec3::ZERO {
+                    return 0.0;
+                }
+                (d1.length() - n0.dot(d1)) / s.rest
+            })
+            .fold(0.0, f64::max)
+    }
+
     fn stiffness(&self, mass: &[f64]) -> Option<StiffnessBound> {
         // Gershgorin: lambda_max(M^-1 K) <= max_i sum_{springs at i} 2 k / m_i.
         let mut row = vec![0.0; mass.len()];
@@ -425,5 +442,30 @@ mod tests {
             assert!((*p + *q - *r).length() <= 1e-13 * (1.0 + r.length()), "{r}");
         }
         assert!((e2 - e_ref).abs() <= 1e-14 * e_ref);
+    }
+    /// A spring turned by `a` at its length gains `1 - cos a` of it unseen by a linearisation
+    /// at the start; stretched along itself, nothing.
+    #[test]
+    fn unseen_stretch_is_the_turning_not_the_stretch() {
+        let springs = Springs::new(
+            "stretch",
+            vec![Spring {
+                i: 0,
+                j: 1,
+                rest: 0.5,
+            }],
+            vec![1.0],
+            "k".into(),
+        );
+        let x0 = [Vec3::ZERO, Vec3::X];
+        let a = 0.5f64;
+        let turned = [Vec3::ZERO, Vec3::new(a.cos(), a.sin(), 0.0)];
+        let seen = springs.unseen_stretch(&x0, &turned);
+        assert!((seen - 2.0 * (1.0 - a.cos())).abs() < 1e-12, "{seen}");
+        assert_eq!(
+            springs.unseen_stretch(&x0, &[Vec3::ZERO, Vec3::X * 3.0]),
+            0.0
+        );
+        assert_eq!(springs.unseen_stretch(&[Vec3::ZERO; 2], &turned), 0.0);
     }
 }

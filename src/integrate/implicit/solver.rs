@@ -56,6 +56,9 @@ pub struct Implicit {
     /// End state `x0 + h v1`, `v1 = v0 + dv` of the current Newton iterate.
     pub(super) xk: Vec<Vec3>,
     pub(super) vk: Vec<Vec3>,
+    /// The positions the current Newton correction's matrix was assembled at (the iterate
+    /// before), against which its result's unseen stretch is judged (see `newton::unseen_stretch`).
+    pub(super) x_lin: Vec<Vec3>,
     pub(super) delta: Vec<Vec3>,
     /// Potential energy at the end positions of the last step (still in `xk`).
     pub(super) end_potential: Option<f64>,
@@ -96,6 +99,7 @@ impl Implicit {
             dv: Vec::new(),
             z: Vec::new(),
             xk: Vec::new(),
+            x_lin: Vec::new(),
             vk: Vec::new(),
             delta: Vec::new(),
             end_potential: None,

@@ -1,9 +1,9 @@
 //! One implicit step as a table of contents: assemble the linearised system, solve it from the
 //! last steps' velocity changes, refit friction drags, contact springs and holds (at most
 //! `MAX_REFITS` solves to a loose tolerance, then the same at the scene's), then Newton
-//! iterations while the step creates energy.
+//! iterations while the step creates energy or stretches springs its linearisation did not see.
 
-use super::newton::potential;
+use super::newton::{potential, unseen_stretch, UNSEEN_STRETCH};
 use super::solve::SolveKind;
 use super::solver::Implicit;
 use crate::effects::State;
@@ -124,7 +124,8 @@ impl Implicit {
         }
 
         // Newton iterations on the nonlinear backward-Euler system, only while the step creates
-        // energy (see `EnergyCheck`).
+        // energy (see `EnergyCheck`) or a spring stretches beyond what the linearisation it was
+        // solved on predicts (`unseen_stretch`).
         // The potential at `x` is known when `x` is exactly where the last step ended (nothing
         // moved it since: no collision response, no kinematic reset off it).
         let u0 = match self.end_potential {
@@ -140,8 +141,10 @@ impl Implicit {
                 self.xk[i] = x[i] + self.vk[i] * h;
             }
             let check = self.energy_check(d, t + h, h, v, u0);
+            let lin: &[Vec3] = if newton == 0 { x } else { &self.x_lin };
+            let unseen = unseen_stretch(d, lin, &self.xk);
             // A non-finite iterate is the divergence guard's case, not Newton's.
-            if check.accepted() || !check.created.is_finite() {
+            if (check.accepted() && unseen <= UNSEEN_STRETCH) || !check.created.is_finite() {
                 self.end_potential = check.accepted().then_some(check.u1);
                 break;
             }
@@ -152,8 +155,9 @@ impl Implicit {
             }
             if newton == MAX_NEWTON {
                 log::debug!(
-                    "implicit step still creates energy after {newton} Newton iterations \
-                     ({check:?}); keeping the best iterate"
+                    "implicit step still creates energy or stretches springs unseen after \
+                     {newton} Newton iterations ({check:?}, unseen stretch {unseen:.3}); keeping \
+                     the best iterate"
                 );
                 std::mem::swap(&mut self.dv, &mut self.best);
                 break;
@@ -169,6 +173,7 @@ impl Implicit {
                 },
                 h,
             );
+            self.x_lin.clone_from(&xk);
             (self.xk, self.vk) = (xk, vk);
             // Solve for the correction: `b` holds `-g`, and the constrained part is met already.
             // `dv` moves to `delta` while the correction is solved for in `dv` (from zero).
