@@ -9,7 +9,9 @@
 //! first contact and those with contacts), force evaluations per frame and the contacts at the
 //! end. `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
 //! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
-//! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the material). It uses only `Simulation`'s public metrics, so the same file runs on an older
+//! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the material);
+//! `DRAPE_BENCH_LINEARISATION=0.2` sets `solver.linearisation_tolerance` (Newton iterations while
+//! a spring stretches more than that beyond its linearised prediction; 1e9: the energy check alone). It uses only `Simulation`'s public metrics, so the same file runs on an older
 //! checkout for a ratio in one session.
 
 use drape::cloth::topology::{springs, SpringKind};
@@ -65,6 +67,12 @@ fn load(file: &str, res: usize) -> Simulation {
         .and_then(|m| m.parse().ok())
     {
         s.cloths[0].material.friction = mu;
+    }
+    if let Some(t) = std::env::var("DRAPE_BENCH_LINEARISATION")
+        .ok()
+        .and_then(|t| t.parse().ok())
+    {
+        s.solver.linearisation_tolerance = t;
     }
     s.build().expect("valid scene")
 }

@@ -885,6 +885,18 @@ fn overflowing_numbers_are_named_by_their_key() {
         ),
         ("dt 1e9 for 0.2 s", "dt: 0.02", "dt: 1e9", "solver.dt"),
         (
+            "linearisation tolerance NaN",
+            "dt: 0.02",
+            "dt: 0.02, linearisation_tolerance: .nan",
+            "solver.linearisation_tolerance",
+        ),
+        (
+            "linearisation tolerance 0",
+            "dt: 0.02",
+            "dt: 0.02, linearisation_tolerance: 0",
+            "solver.linearisation_tolerance",
+        ),
+        (
             "dt above duration",
             "duration: 0.1",
             "duration: 0.01",

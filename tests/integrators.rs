@@ -22,6 +22,7 @@ fn implicit_tight() -> ImplicitSettings {
     ImplicitSettings {
         cg_tolerance: 1e-12,
         cg_max_iterations: 100,
+        ..ImplicitSettings::default()
     }
 }
 

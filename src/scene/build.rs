@@ -107,6 +107,7 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
     let integrator = scene.solver.integrator.build(ImplicitSettings {
         cg_tolerance: scene.solver.cg_tolerance,
         cg_max_iterations: scene.solver.cg_max_iterations,
+        linearisation_tolerance: scene.solver.linearisation_tolerance,
     });
     let settings = StepSettings {
         dt: scene.solver.dt,

@@ -45,6 +45,10 @@ pub struct SolverSpec {
     pub cg_tolerance: f64,
     #[serde(default = "ImplicitSettings::default_iterations")]
     pub cg_max_iterations: u32,
+    /// Implicit: a spring's stretch beyond its linearisation's prediction, over its rest length,
+    /// above which Newton iterations follow the solve.
+    #[serde(default = "ImplicitSettings::default_linearisation")]
+    pub linearisation_tolerance: f64,
     #[serde(default)]
     pub guard: GuardSettings,
 }
@@ -60,6 +64,9 @@ impl ImplicitSettings {
     fn default_iterations() -> u32 {
         ImplicitSettings::default().cg_max_iterations
     }
+    fn default_linearisation() -> f64 {
+        ImplicitSettings::default().linearisation_tolerance
+    }
 }
 
 impl Default for SolverSpec {
@@ -70,6 +77,7 @@ impl Default for SolverSpec {
             substeps: 1,
             cg_tolerance: ImplicitSettings::default().cg_tolerance,
             cg_max_iterations: ImplicitSettings::default().cg_max_iterations,
+            linearisation_tolerance: ImplicitSettings::default().linearisation_tolerance,
             guard: GuardSettings::default(),
         }
     }

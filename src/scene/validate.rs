@@ -253,6 +253,12 @@ impl Scene {
             1,
             MAX_ITERATIONS,
         )?;
+        positive(
+            "solver.linearisation_tolerance",
+            s.linearisation_tolerance,
+            1e12,
+            "",
+        )?;
         positive("solver.guard.max_speed", s.guard.max_speed, 1e12, " m/s")?;
         non_negative(
             "solver.guard.energy_growth",

@@ -8,6 +8,10 @@ pub struct ImplicitSettings {
     /// Relative residual at which conjugate gradients stop.
     pub cg_tolerance: f64,
     pub cg_max_iterations: u32,
+    /// Newton iterations follow the linearised solve while a spring stretches more than this
+    /// share of its rest length beyond what the linearisation predicts (see
+    /// `implicit::newton::unseen_stretch`); the energy check applies besides.
+    pub linearisation_tolerance: f64,
 }
 
 impl Default for ImplicitSettings {
@@ -15,18 +19,22 @@ impl Default for ImplicitSettings {
         Self {
             cg_tolerance: 1e-5,
             cg_max_iterations: 200,
+            linearisation_tolerance: 0.1,
         }
     }
 }
 
 impl ImplicitSettings {
-    /// Settings a scene could name: a finite tolerance in (0, 1) and a cap of at least one
-    /// iteration (the scene's validation enforces the same for files).
+    /// Settings a scene could name: a finite tolerance in (0, 1), a cap of at least one
+    /// iteration and a finite positive linearisation tolerance (the scene's validation enforces
+    /// the same for files).
     pub fn is_usable(&self) -> bool {
         self.cg_tolerance.is_finite()
             && self.cg_tolerance > 0.0
             && self.cg_tolerance < 1.0
             && self.cg_max_iterations >= 1
+            && self.linearisation_tolerance.is_finite()
+            && self.linearisation_tolerance > 0.0
     }
 }
 

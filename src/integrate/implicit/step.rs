@@ -3,7 +3,7 @@
 //! `MAX_REFITS` solves to a loose tolerance, then the same at the scene's), then Newton
 //! iterations while the step creates energy or stretches springs its linearisation did not see.
 
-use super::newton::{potential, unseen_stretch, UNSEEN_STRETCH};
+use super::newton::{potential, unseen_stretch};
 use super::solve::SolveKind;
 use super::solver::Implicit;
 use crate::effects::State;
@@ -144,7 +144,9 @@ impl Implicit {
             let lin: &[Vec3] = if newton == 0 { x } else { &self.x_lin };
             let unseen = unseen_stretch(d, lin, &self.xk);
             // A non-finite iterate is the divergence guard's case, not Newton's.
-            if (check.accepted() && unseen <= UNSEEN_STRETCH) || !check.created.is_finite() {
+            if (check.accepted() && unseen <= self.settings.linearisation_tolerance)
+                || !check.created.is_finite()
+            {
                 self.end_potential = check.accepted().then_some(check.u1);
                 break;
             }

@@ -306,6 +306,7 @@ mod tests {
             substeps: 2,
             cg_tolerance: 1e-5,
             cg_max_iterations: 200,
+            linearisation_tolerance: 0.1,
         };
         let mut d = DiagnosticsInput {
             name: "drape",

@@ -48,6 +48,8 @@ pub struct Quality {
     pub substeps: u32,
     pub cg_tolerance: f64,
     pub cg_max_iterations: u32,
+    /// The scene's own at every level (see `ImplicitSettings::linearisation_tolerance`).
+    pub linearisation_tolerance: f64,
 }
 
 impl Quality {
@@ -56,6 +58,7 @@ impl Quality {
         ImplicitSettings {
             cg_tolerance: self.cg_tolerance,
             cg_max_iterations: self.cg_max_iterations,
+            linearisation_tolerance: self.linearisation_tolerance,
         }
     }
 }
@@ -273,6 +276,7 @@ pub fn lowest_quality(scene: &mut Scene, bounds: &QualityBounds) {
             substeps: s.substeps,
             cg_tolerance: s.cg_tolerance,
             cg_max_iterations: s.cg_max_iterations,
+            linearisation_tolerance: s.linearisation_tolerance,
         };
         if let Some(low) = ladder(full, bounds).last() {
             (s.substeps, s.cg_tolerance, s.cg_max_iterations) =
@@ -290,6 +294,7 @@ fn ladder(full: Quality, b: &QualityBounds) -> Vec<Quality> {
         cg_max_iterations: b
             .min_cg_max_iterations
             .clamp(1, full.cg_max_iterations.max(1)),
+        linearisation_tolerance: full.linearisation_tolerance,
     };
     let n = b.levels.max(2);
     // Equal ends give that value exactly (powf would round it), and nothing leaves [a, z].
@@ -315,6 +320,7 @@ fn ladder(full: Quality, b: &QualityBounds) -> Vec<Quality> {
                 substeps: int(full.substeps, low.substeps),
                 cg_tolerance: geo(full.cg_tolerance, low.cg_tolerance, s),
                 cg_max_iterations: int(full.cg_max_iterations, low.cg_max_iterations),
+                linearisation_tolerance: full.linearisation_tolerance,
             }
         };
         if out.last() != Some(&q) {
@@ -346,6 +352,7 @@ mod tests {
             substeps: 2,
             cg_tolerance: 1e-5,
             cg_max_iterations: 200,
+            linearisation_tolerance: 0.1,
         }
     }
 
@@ -381,7 +388,8 @@ mod tests {
             Quality {
                 substeps: 1,
                 cg_tolerance: 1e-2,
-                cg_max_iterations: 50
+                cg_max_iterations: 50,
+                linearisation_tolerance: 0.1,
             }
         );
         for w in l.windows(2) {
@@ -395,6 +403,7 @@ mod tests {
             substeps: 1,
             cg_tolerance: 0.05,
             cg_max_iterations: 20,
+            linearisation_tolerance: 0.1,
         };
         let c = QualityController::new(tight, &QualityBounds::default(), true);
         assert_eq!(c.ladder(), &[tight]);

@@ -97,6 +97,7 @@ impl SimLoop {
             substeps: scene.solver.substeps,
             cg_tolerance: scene.solver.cg_tolerance,
             cg_max_iterations: scene.solver.cg_max_iterations,
+            linearisation_tolerance: scene.solver.linearisation_tolerance,
         };
         // Only the implicit integrator adapts: fewer substeps make explicit ones unstable.
         let implicit = scene.solver.integrator == IntegratorKind::Implicit;
