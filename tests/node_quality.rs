@@ -125,6 +125,8 @@ fn a_slow_scene_settles_at_the_best_quality_that_holds_real_time() {
     );
     let tol: f64 = value(d, "quality_cg_tolerance").parse().unwrap();
     assert!((tol / q.cg_tolerance - 1.0).abs() < 1e-12);
+    let lin: f64 = value(d, "quality_linearisation_tolerance").parse().unwrap();
+    assert_eq!(lin, q.linearisation_tolerance);
     // Real time held: each step costs under dt, so the loop waits for the clock and a 1 s
     // window covers 60 or 61 steps; the factor is 1 within one step per window (1/60).
     let rtf: f64 = value(d, "real_time_factor").parse().unwrap();

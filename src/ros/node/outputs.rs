@@ -196,6 +196,10 @@ fn quality_values(q: &QualityStatus) -> Vec<(&'static str, String)> {
             q.quality.cg_max_iterations.to_string(),
         ),
         (
+            "quality_linearisation_tolerance",
+            q.quality.linearisation_tolerance.to_string(),
+        ),
+        (
             "real_time_factor_at_lowest_quality",
             q.short_of_real_time
                 .map_or_else(|| "n/a".into(), |l| format!("{:.3}", 1.0 / l)),

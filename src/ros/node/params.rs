@@ -95,7 +95,7 @@ pub struct NodeParams {
     /// Lower an implicit scene's quality to hold real time (see [`super::quality`]).
     pub adaptive_quality: bool,
     /// How low (`quality.min_substeps`, `quality.max_cg_tolerance`,
-    /// `quality.min_cg_max_iterations`, `quality.levels`).
+    /// `quality.min_cg_max_iterations`, `quality.max_linearisation_tolerance`, `quality.levels`).
     pub quality: QualityBounds,
     pub service_wire: ServiceWire,
     pub topics: Topics,
@@ -324,6 +324,13 @@ impl NodeParams {
             }
             "quality.min_cg_max_iterations" => {
                 self.quality.min_cg_max_iterations = integer(v, 1, 100_000)?
+            }
+            "quality.max_linearisation_tolerance" => {
+                let t = number(v)?;
+                if t <= 0.0 {
+                    return Err(ParamError::NotPositive { value: t });
+                }
+                self.quality.max_linearisation_tolerance = t;
             }
             "quality.levels" => self.quality.levels = integer(v, 2, 64)?,
             "max_backlog_steps" => self.max_backlog_steps = integer(v, 1, 1000)?,

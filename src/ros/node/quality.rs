@@ -48,7 +48,8 @@ pub struct Quality {
     pub substeps: u32,
     pub cg_tolerance: f64,
     pub cg_max_iterations: u32,
-    /// The scene's own at every level (see `ImplicitSettings::linearisation_tolerance`).
+    /// Newton iterations while a spring stretches more than this beyond its linearised
+    /// prediction (see `ImplicitSettings::linearisation_tolerance`).
     pub linearisation_tolerance: f64,
 }
 
@@ -67,19 +68,26 @@ impl std::fmt::Display for Quality {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} substep(s), CG tolerance {:.1e}, cap {}",
-            self.substeps, self.cg_tolerance, self.cg_max_iterations
+            "{} substep(s), CG tolerance {:.1e}, cap {}, linearisation tolerance {:.2}",
+            self.substeps, self.cg_tolerance, self.cg_max_iterations, self.linearisation_tolerance
         )
     }
 }
 
 /// How low the node may take quality (node parameters `quality.*`). The defaults are the old
-/// `real_time_preview` settings: one substep, CG tolerance 1e-2, at most 50 iterations.
+/// `real_time_preview` settings: one substep, CG tolerance 1e-2, at most 50 iterations; and
+/// Newton iterations only for springs turned past 90 degrees in a step (linearisation
+/// tolerance 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QualityBounds {
     pub min_substeps: u32,
     pub max_cg_tolerance: f64,
     pub min_cg_max_iterations: u32,
+    /// The loosest linearisation tolerance: with the scene's default (0.1) the towel dragged by
+    /// drape_bot's gripper with self-collision (`cargo bench --bench node_latency`) took 15.5 and
+    /// 18.7 ms a step at the lowest rung against 14.5 with the check off, and fell short of real
+    /// time (0.84-0.96).
+    pub max_linearisation_tolerance: f64,
     /// Rungs from the scene's quality to the bounds, both included (at least 2).
     pub levels: u32,
 }
@@ -90,6 +98,7 @@ impl Default for QualityBounds {
             min_substeps: 1,
             max_cg_tolerance: 1e-2,
             min_cg_max_iterations: 50,
+            max_linearisation_tolerance: 1.0,
             levels: 8,
         }
     }
@@ -281,6 +290,7 @@ pub fn lowest_quality(scene: &mut Scene, bounds: &QualityBounds) {
         if let Some(low) = ladder(full, bounds).last() {
             (s.substeps, s.cg_tolerance, s.cg_max_iterations) =
                 (low.substeps, low.cg_tolerance, low.cg_max_iterations);
+            s.linearisation_tolerance = low.linearisation_tolerance;
         }
     }
 }
@@ -294,7 +304,9 @@ fn ladder(full: Quality, b: &QualityBounds) -> Vec<Quality> {
         cg_max_iterations: b
             .min_cg_max_iterations
             .clamp(1, full.cg_max_iterations.max(1)),
-        linearisation_tolerance: full.linearisation_tolerance,
+        linearisation_tolerance: b
+            .max_linearisation_tolerance
+            .max(full.linearisation_tolerance),
     };
     let n = b.levels.max(2);
     // Equal ends give that value exactly (powf would round it), and nothing leaves [a, z].
@@ -320,7 +332,11 @@ fn ladder(full: Quality, b: &QualityBounds) -> Vec<Quality> {
                 substeps: int(full.substeps, low.substeps),
                 cg_tolerance: geo(full.cg_tolerance, low.cg_tolerance, s),
                 cg_max_iterations: int(full.cg_max_iterations, low.cg_max_iterations),
-                linearisation_tolerance: full.linearisation_tolerance,
+                linearisation_tolerance: geo(
+                    full.linearisation_tolerance,
+                    low.linearisation_tolerance,
+                    s,
+                ),
             }
         };
         if out.last() != Some(&q) {
@@ -389,13 +405,14 @@ mod tests {
                 substeps: 1,
                 cg_tolerance: 1e-2,
                 cg_max_iterations: 50,
-                linearisation_tolerance: 0.1,
+                linearisation_tolerance: 1.0,
             }
         );
         for w in l.windows(2) {
             assert!(w[1].substeps <= w[0].substeps);
             assert!(w[1].cg_tolerance >= w[0].cg_tolerance);
             assert!(w[1].cg_max_iterations <= w[0].cg_max_iterations);
+            assert!(w[1].linearisation_tolerance >= w[0].linearisation_tolerance);
             assert_ne!(w[0], w[1]);
         }
         // Bounds looser than the scene's own settings keep the scene's.
@@ -403,7 +420,7 @@ mod tests {
             substeps: 1,
             cg_tolerance: 0.05,
             cg_max_iterations: 20,
-            linearisation_tolerance: 0.1,
+            linearisation_tolerance: 2.0,
         };
         let c = QualityController::new(tight, &QualityBounds::default(), true);
         assert_eq!(c.ladder(), &[tight]);

@@ -75,6 +75,8 @@ pub enum ParamError {
     NotAFraction { value: f64 },
     #[error("must be >= 0, got {value}")]
     Negative { value: f64 },
+    #[error("must be > 0, got {value}")]
+    NotPositive { value: f64 },
     #[error("expected [r, g, b, a], got {got:?}")]
     NotAColor { got: Box<Value> },
     #[error("expected 4 components, got {count}")]

@@ -120,7 +120,8 @@ fn adaptive_quality_and_its_bounds() {
     assert_eq!(p.quality, QualityBounds::default());
     let text = format!(
         "{FILE}    adaptive_quality: false\n    quality: {{ min_substeps: 2, \
-         max_cg_tolerance: 0.001, min_cg_max_iterations: 80, levels: 4 }}\n"
+         max_cg_tolerance: 0.001, min_cg_max_iterations: 80, max_linearisation_tolerance: 0.5, \
+         levels: 4 }}\n"
     );
     let q = NodeParams::from_yaml(&text, "f", "drape").unwrap();
     assert!(!q.adaptive_quality);
@@ -130,6 +131,7 @@ fn adaptive_quality_and_its_bounds() {
             min_substeps: 2,
             max_cg_tolerance: 1e-3,
             min_cg_max_iterations: 80,
+            max_linearisation_tolerance: 0.5,
             levels: 4
         }
     );
@@ -137,6 +139,8 @@ fn adaptive_quality_and_its_bounds() {
         ("quality.min_substeps", "0"),
         ("quality.max_cg_tolerance", "1.5"),
         ("quality.levels", "1"),
+        ("quality.max_linearisation_tolerance", "0"),
+        ("quality.max_linearisation_tolerance", ".nan"),
         ("adaptive_quality", "fast"),
         ("real_time_preview", "true"),
     ] {
