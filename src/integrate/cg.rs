@@ -110,8 +110,7 @@ impl Pcg {
         }
         // r = S (b - A z): the residual of the start without the guess.
         if target {
-            a.mul(dv, &mut self.q);
-            self.extra.add_product(dv, &mut self.q);
+            self.extra.system_product(a, dv, &mut self.q);
         } else {
             self.q.fill(Vec3::ZERO);
         }
@@ -125,8 +124,7 @@ impl Pcg {
         // minimises the error's energy norm over their span (a Galerkin step on `S A S`): never
         // worse than starting from zero, exact when the solution lies in the span.
         if guess {
-            a.mul(&self.c, &mut self.q);
-            self.extra.add_product(&self.c, &mut self.q);
+            self.extra.system_product(a, &self.c, &mut self.q);
             let (mut gr, mut gag) = (0.0, 0.0);
             for i in 0..n {
                 self.q[i] = filt[i].apply(self.q[i]);
@@ -140,8 +138,7 @@ impl Pcg {
                 for i in 0..n {
                     self.h[i] = filt[i].apply(second[i]);
                 }
-                a.mul(&self.h, &mut self.ah);
-                self.extra.add_product(&self.h, &mut self.ah);
+                self.extra.system_product(a, &self.h, &mut self.ah);
                 let (mut hr, mut hah, mut gah) = (0.0, 0.0, 0.0);
                 for i in 0..n {
                     self.ah[i] = filt[i].apply(self.ah[i]);
@@ -247,8 +244,7 @@ impl Pcg {
         let clock = std::time::Instant::now();
         // The vector passes run in halves on two threads for large cloths (`sum_in_halves`).
         while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
-            a.mul(&self.c, &mut self.q);
-            self.extra.add_product(&self.c, &mut self.q);
+            self.extra.system_product(a, &self.c, &mut self.q);
             let cq = sum_in_halves(n, (&mut self.q[..], &self.c[..], filt), |(q, c, filt)| {
                 let mut cq = 0.0;
                 for ((q, c), f) in q.iter_mut().zip(c).zip(filt) {

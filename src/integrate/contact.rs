@@ -208,8 +208,14 @@ impl OffPattern {
         }
     }
 
+    /// `out = (A + exact - lumped) u`: the system's product, `A`'s and the terms'.
+    pub fn system_product(&self, a: &BlockCsr, u: &[Vec3], out: &mut [Vec3]) {
+        a.mul(u, out);
+        self.add_product(u, out);
+    }
+
     /// `out += (exact - lumped) u` over the terms.
-    pub fn add_product(&self, u: &[Vec3], out: &mut [Vec3]) {
+    fn add_product(&self, u: &[Vec3], out: &mut [Vec3]) {
         for (c, scale) in &self.terms {
             let k = c.stiffness * scale;
             let (un, spread) = (c.along(u), c.spread());

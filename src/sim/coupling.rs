@@ -56,7 +56,7 @@ pub(super) struct Coupling {
     spring_forces: Vec<([u32; 4], f64)>,
     /// Indices into `constraints.contacts` from which the springs hold cloth layers apart
     /// (`layer_springs`); the obstacles' come before.
-    pub layers_from: usize,
+    layers_from: usize,
     /// What the solver did this substep, for the stage's `resolve`.
     pub feedback: SolverFeedback,
     /// Indices into `constraints.contacts` of the springs on moving features: they do work on

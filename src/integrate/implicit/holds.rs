@@ -19,8 +19,9 @@ impl Implicit {
         let Some(a) = self.a.as_ref() else {
             return;
         };
-        a.mul(&self.dv, &mut self.impulses);
-        self.pcg.extra.add_product(&self.dv, &mut self.impulses);
+        self.pcg
+            .extra
+            .system_product(a, &self.dv, &mut self.impulses);
         for i in 0..n {
             self.impulses[i] = filt[i].constrained(self.impulses[i] - self.b[i]);
         }
