@@ -11,6 +11,7 @@
 //! obstacle), `obstacle`, `motion`, `spec` (scene description), `broad`, `narrow` and `ring`
 //! (geometry and the mesh's 1-ring).
 
+mod arrival;
 mod broad;
 mod contact;
 mod error;
@@ -34,6 +35,7 @@ mod stage;
 mod vertex_pass;
 mod wedge;
 
+pub use arrival::Arrival;
 pub use contact::Contact;
 pub use error::StageError;
 pub use features::{FeatureContact, DEEP as FEATURE_DEEP};

@@ -17,7 +17,7 @@
 
 use super::front::Front;
 use crate::cloth::Cloth;
-use crate::collide::{CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
+use crate::collide::{Arrival, CollisionStage, HeldNormals, SolverFeedback, FEATURE_DEEP};
 use crate::effects::{EffectSet, State};
 use crate::integrate::{Capabilities, Constraints, ContactSpring, Friction};
 use crate::linalg::Filter;
@@ -40,6 +40,15 @@ const CONTACT_STIFFNESS: f64 = 1e3;
 /// (`benches/fast_links.rs`); no crossing either way, the largest edge over the 24 rod cases of
 /// `tests/fast_links.rs` 1.152 -> 1.130, drape_bot's arm through a towel 1.153 -> 1.093.
 const MOVING_CONTACT_STIFFNESS: f64 = 200.0;
+
+/// `k h^2 / m` of the tangential anchor that holds an arriving vertex friction stops where its
+/// path hit the layer (see `Coupling::arrival_springs`): it leaves a hundredth of the slip the
+/// step would have carried it on by (44 um of a patch's 4.4 mm landing on a slope it sticks
+/// to, `tests/landing.rs`). As stiff as the normal spring (1e3) the anchors held against the
+/// pull of a whipping border: S1 64x64 (`cargo bench --bench contact`) over frictions
+/// 0.46-0.54 ended its worst frame's largest edge at 1.086-1.258 against 1.078-1.140 here, p99
+/// 1.028-1.036 against 1.026.
+const ANCHOR_STIFFNESS: f64 = 100.0;
 
 /// The coupling's state: this substep's constraints and holds, the lagged forces of the last
 /// solve, and the feedback for the stage.
@@ -64,6 +73,13 @@ pub(super) struct Coupling {
     pub moving_springs: Vec<usize>,
     /// The mesh edges the front of a link's drag spreads over.
     front: Front,
+    /// Scratch of `arrival_springs`: the vertices the last pass touched, and the arrivals.
+    touched: Vec<bool>,
+    /// This substep's arrivals, the index of each one's normal spring in
+    /// `constraints.contacts`, and those springs' end forces (N) once solved.
+    arrivals: Vec<Arrival>,
+    arrival_springs: Vec<usize>,
+    arrival_forces: Vec<f64>,
 }
 
 /// What the coupling reads at the start of a substep.
@@ -113,6 +129,8 @@ impl Coupling {
     ) {
         self.edge_springs(stage, s, caps);
         self.contact_constraints(stage, s, caps.solves_friction, scratch);
+        self.arrival_springs(stage, s, caps);
+        self.layers_from = self.constraints.contacts.len();
         self.layer_springs(stage, s, caps);
     }
 
@@ -120,7 +138,12 @@ impl Coupling {
     /// are the normal forces of their friction next substep.
     pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
         self.spring_forces.clear();
+        self.arrival_forces.clear();
         if let Some(forces) = contact_forces {
+            // Each arrival's normal spring (its anchor's tangential springs follow it).
+            self.arrival_forces.extend(
+                (self.arrival_springs.iter()).map(|&k| forces.get(k).copied().unwrap_or(0.0)),
+            );
             self.spring_forces.extend(
                 self.constraints.contacts[..self.layers_from]
                     .iter()
@@ -153,6 +176,14 @@ impl Coupling {
         let n = cloth.len();
         self.friction_limit.clear();
         self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
+        // Arrival springs that ended acting: their normal impulse counts in the stage's
+        // friction bound, as a held vertex's does.
+        for (a, f) in self.arrivals.iter().zip(&self.arrival_forces) {
+            let i = a.vertex as usize;
+            if *f > 0.0 && i < n {
+                self.feedback.hold(i, a.normal, f * h / cloth.mass[i]);
+            }
+        }
         if self.held.is_empty() {
             return;
         }
@@ -278,7 +309,6 @@ impl Coupling {
             self.constraints.contacts.push(spring);
         }
         self.feedback.set_sprung(sprung);
-        self.layers_from = self.constraints.contacts.len();
         self.front.strain(
             s.cloth,
             &self.constraints.contacts,
@@ -286,6 +316,73 @@ impl Coupling {
             s.h,
             &mut self.constraints.front_strain,
         );
+    }
+
+    /// Free vertices whose start velocity carries them into a static solid's contact layer
+    /// within this substep (see [`CollisionStage::arrivals`]) get a one-sided spring on the
+    /// layer's tangent plane, as stiff as an edge's: the solve stops them at the layer with
+    /// their neighbours, where the response would push them back alone after it. A spring acts
+    /// only while the solved step ends inside the layer (the active set, see [`ContactSpring`]);
+    /// its friction is the stage's, after the solve. Vertices the last pass touched (held or
+    /// released) are the stage's, as are those starting in a solid or its layer.
+    fn arrival_springs(
+        &mut self,
+        stage: Option<&CollisionStage>,
+        s: &StartState,
+        caps: &Capabilities,
+    ) {
+        self.arrivals.clear();
+        self.arrival_springs.clear();
+        let Some(stage) = stage.filter(|_| caps.solves_contacts) else {
+            return;
+        };
+        let n = s.cloth.len();
+        self.touched.clear();
+        self.touched.resize(n, false);
+        for c in stage.contacts() {
+            if let Some(t) = self.touched.get_mut(c.vertex as usize) {
+                *t = true;
+            }
+        }
+        let (filter, touched) = (&self.constraints.filter, &self.touched);
+        let skip = |i: usize| filter[i] != Filter::Free || touched[i];
+        let mut arrivals = std::mem::take(&mut self.arrivals);
+        stage.arrivals(&s.cloth.x, &s.cloth.v, s.h, skip, &mut arrivals);
+        // Every arrival gets its spring, in order (`solved` reads their forces by position).
+        arrivals.retain(|a| (a.vertex as usize) < n);
+        let h = s.h_scene;
+        self.arrival_springs.clear();
+        for a in &arrivals {
+            let i = a.vertex;
+            let spring = ContactSpring {
+                verts: [i; 4],
+                weights: [1.0, 0.0, 0.0, 0.0],
+                normal: a.normal,
+                point: a.point,
+                gap: a.gap,
+                stiffness: CONTACT_STIFFNESS * s.cloth.mass[i as usize] / (h * h),
+                friction: 0.0,
+            };
+            // An invalid spring (non-finite input) keeps its slot; the solver leaves it unused.
+            self.arrival_springs.push(self.constraints.contacts.len());
+            self.constraints.contacts.push(spring);
+            if a.sticks {
+                // Friction stops it where it hits: anchored there along the tangent plane by
+                // two opposed one-sided springs per direction (the active set keeps the one on
+                // the side the vertex ends), so the solve ends it there, neighbours included.
+                let (t1, t2) = a.normal.any_orthonormal_pair();
+                for t in [t1, -t1, t2, -t2] {
+                    self.constraints.contacts.push(ContactSpring {
+                        normal: t,
+                        point: a.hit,
+                        gap: 0.0,
+                        stiffness: ANCHOR_STIFFNESS * spring.stiffness / CONTACT_STIFFNESS,
+                        ..spring
+                    });
+                }
+            }
+        }
+        self.arrivals = arrivals;
     }
 
     /// Contacts of the last collision pass become constraints of this substep (the survey's mass
