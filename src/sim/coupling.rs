@@ -322,9 +322,11 @@ impl Coupling {
     /// within this substep (see [`CollisionStage::arrivals`]) get a one-sided spring on the
     /// layer's tangent plane, as stiff as an edge's: the solve stops them at the layer with
     /// their neighbours, where the response would push them back alone after it. A spring acts
-    /// only while the solved step ends inside the layer (the active set, see [`ContactSpring`]);
-    /// its friction is the stage's, after the solve. Vertices the last pass touched (held or
-    /// released) are the stage's, as are those starting in a solid or its layer.
+    /// only while the solved step ends inside the layer (the active set, see [`ContactSpring`]).
+    /// One that Coulomb friction stops where it hits is anchored there in the tangent plane
+    /// too (see [`ANCHOR_STIFFNESS`]); a sliding one's friction is the stage's, after the
+    /// solve. Vertices the last pass touched (held or released) are the stage's, as are those
+    /// starting in a solid or its layer.
     fn arrival_springs(
         &mut self,
         stage: Option<&CollisionStage>,
@@ -348,10 +350,7 @@ impl Coupling {
         let skip = |i: usize| filter[i] != Filter::Free || touched[i];
         let mut arrivals = std::mem::take(&mut self.arrivals);
         stage.arrivals(&s.cloth.x, &s.cloth.v, s.h, skip, &mut arrivals);
-        // Every arrival gets its spring, in order (`solved` reads their forces by position).
-        arrivals.retain(|a| (a.vertex as usize) < n);
         let h = s.h_scene;
-        self.arrival_springs.clear();
         for a in &arrivals {
             let i = a.vertex;
             let spring = ContactSpring {
