@@ -6,6 +6,19 @@
 use drape::scene::Scene;
 use std::path::Path;
 
+/// Issue 16's S1 (`benches/scenes/bench_s1.yaml`) at `res` x `res`, and issue 18's impact bound
+/// plus 10 % for its landing, `1.1 (1 + 2 v / c + M g / k)`.
+fn s1(res: usize) -> (drape::sim::Simulation, f64) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/scenes/bench_s1.yaml");
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    scene.cloths[0].grid.resolution = [res, res];
+    let (k, rho, g, fall) = (1000.0f64, 0.2f64, 9.81f64, 0.2f64);
+    let v = (2.0 * g * fall).sqrt();
+    // The cloth is 1 m square: its mass is `rho` times 1 m^2.
+    let bound = 1.1 * (1.0 + 2.0 * v / (k / rho).sqrt() + rho * g / k);
+    (scene.build().unwrap_or_else(|e| panic!("{e}")), bound)
+}
+
 /// Issue 16's S1 at 32 x 32 (`benches/scenes/bench_s1.yaml`: a 1 m cloth dropped flat from
 /// 1.0 m onto a still sphere of radius 0.3 m at 0.5 m, implicit at 60 Hz, one substep a frame):
 /// over its first second (landing at `v = sqrt(2 g 0.2 m)` = 1.98 m/s, then sliding on the ball
@@ -15,14 +28,7 @@ use std::path::Path;
 /// fraction of its spacing.
 #[test]
 fn a_cloth_dropped_on_a_sphere_lands_within_the_impact_bound() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/scenes/bench_s1.yaml");
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    scene.cloths[0].grid.resolution = [32, 32];
-    let (k, rho, g, fall) = (1000.0f64, 0.2f64, 9.81f64, 0.2f64);
-    let v = (2.0 * g * fall).sqrt();
-    // The cloth is 1 m square: its mass is `rho` times 1 m^2.
-    let bound = 1.1 * (1.0 + 2.0 * v / (k / rho).sqrt() + rho * g / k);
-    let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
+    let (mut sim, bound) = s1(32);
     let mut worst = (0.0f64, 0.0f64);
     let mut touched = false;
     for _ in 0..60 {
@@ -57,14 +63,8 @@ fn a_cloth_dropped_on_a_sphere_lands_within_the_impact_bound() {
 /// impact bound of the test above.
 #[test]
 fn a_cloth_landing_on_a_sphere_is_stopped_in_the_solve_not_split() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/scenes/bench_s1.yaml");
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    scene.cloths[0].grid.resolution = [48, 48];
-    let (k, rho, g, fall) = (1000.0f64, 0.2f64, 9.81f64, 0.2f64);
-    let v = (2.0 * g * fall).sqrt();
-    let bound = 1.1 * (1.0 + 2.0 * v / (k / rho).sqrt() + rho * g / k);
+    let (mut sim, bound) = s1(48);
     let (centre, radius) = (drape::Vec3::new(0.0, 0.0, 0.5), 0.3);
-    let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
     let (mut splits, mut touched, mut worst, mut deepest) = (0, false, 0.0f64, 0.0f64);
     for _ in 0..60 {
         let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
