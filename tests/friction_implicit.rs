@@ -12,10 +12,24 @@ const MU: f64 = 0.4;
 /// tilted frame), with friction `MU`, started at `v0` (m/s) downhill. Returns the centre-of-mass
 /// velocity along the downhill direction after every step up to `t_end`, and the step.
 fn run(angle: f64, v0: f64, t_end: f64) -> (Vec<f64>, f64) {
+    run_on(angle, v0, 0.0, t_end)
+}
+
+/// [`run`] on a plane moving downhill at `belt` (m/s) in its own plane (a conveyor belt).
+fn run_on(angle: f64, v0: f64, belt: f64, t_end: f64) -> (Vec<f64>, f64) {
     let (s, c) = angle.sin_cos();
     // The plane's normal (tilted about y), the cloth lying on it `thickness` above.
     let th = 0.004;
     let normal = [s, 0.0, c];
+    let motion = if belt == 0.0 {
+        String::new()
+    } else {
+        format!(
+            ", motion: {{ type: velocity, linear: [{}, 0.0, {}], angular: [0.0, 0.0, 0.0] }}",
+            belt * c,
+            -belt * s
+        )
+    };
     let yaml = format!(
         r#"
 name: slope
@@ -34,7 +48,7 @@ cloths:
       thickness: {th}
       friction: {MU}
 obstacles:
-  - {{ name: slope, shape: {{ type: plane, normal: [{nx}, {ny}, {nz}] }} }}
+  - {{ name: slope, shape: {{ type: plane, normal: [{nx}, {ny}, {nz}] }}{motion} }}
 collision: {{ mode: continuous, response: both }}
 "#,
         x = normal[0] * th,
@@ -161,6 +175,43 @@ fn sliding_decelerates_at_mu_g_and_stops() {
         assert!(
             *vk >= -drape::integrate::STICK_SPEED,
             "t {t:.4} s: friction reversed the cloth ({vk:.3e} m/s)"
+        );
+    }
+}
+
+/// A cloth dropped at rest onto a level belt moving at `V` is dragged by Coulomb friction at
+/// `mu g` until it rides along at `V` (at `V / (mu g)`), then rides along and never overtakes
+/// it. The moving surface's friction is solved with the cloth (a drag towards the belt's
+/// velocity), so the velocity is Coulomb's to the same bounds as on a still plane: up to two
+/// substeps' lag at the start (the normal force and the mode are lagged one substep each) and
+/// the stick speed once riding. (The collision stage's friction after the solve, which moving
+/// surfaces had before, gives the same here: a uniform patch has no neighbour pulling a held
+/// vertex off the belt. What it did to such a vertex is `tests/robot_scenes.rs`'s forearm.)
+#[test]
+fn a_moving_belt_drags_the_cloth_at_mu_g_until_it_rides_along() {
+    let belt = 0.3;
+    let (v, dt) = run_on(0.0, 0.0, belt, 0.4);
+    let h = dt / 2.0;
+    let caught = belt / (MU * G);
+    let stick = drape::integrate::STICK_SPEED;
+    for (k, vk) in v.iter().enumerate() {
+        let t = (k + 1) as f64 * dt;
+        if t < caught - 2.0 * h {
+            let expected = MU * G * t;
+            let slack = 2.0 * h * MU * G + 1e-4 * expected;
+            assert!(
+                (vk - expected).abs() <= slack,
+                "t {t:.4} s: velocity {vk:.5} m/s, Coulomb {expected:.5} (bound {slack:.2e})"
+            );
+        } else if t > caught + 2.0 * h {
+            assert!(
+                (vk - belt).abs() <= stick,
+                "t {t:.4} s (caught up at {caught:.4} s): {vk:.5} m/s against the belt's {belt}"
+            );
+        }
+        assert!(
+            *vk <= belt + stick,
+            "t {t:.4} s: the cloth overtook the belt ({vk:.5} m/s)"
         );
     }
 }

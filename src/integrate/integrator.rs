@@ -57,6 +57,10 @@ pub struct StepReport {
     /// The normal force (N) each of [`super::Constraints::contacts`] exerted at the end of the
     /// step, in their order (empty when the method does not solve them).
     pub contact_forces: Vec<f64>,
+    /// The force (N) each in-solve friction drag rubbing on a moving surface exerted at the end
+    /// of the step, `(vertex, force)`: the surface's work on the cloth, from outside like a held
+    /// vertex's constraint impulse at a moving surface (empty when none).
+    pub moving_friction: Vec<(u32, Vec3)>,
 }
 
 impl StepReport {
@@ -71,6 +75,7 @@ impl StepReport {
         self.cg_bytes = 0.0;
         self.constraint_impulses.clear();
         self.contact_forces.clear();
+        self.moving_friction.clear();
     }
 
     /// [`StepReport::constraint_impulses`], `None` when the method did not report them.

@@ -212,10 +212,8 @@ impl Coupling {
                 self.feedback.hold(i, *normal, dvn);
             }
             if solves_friction {
-                for (normal, surface) in normals.normals().iter().zip(normals.surfaces()) {
-                    if *surface == Vec3::ZERO {
-                        self.feedback.friction_solved(i, *normal);
-                    }
+                for normal in normals.normals() {
+                    self.feedback.friction_solved(i, *normal);
                 }
                 for (slot, (normal, l)) in self.friction_limit[i]
                     .iter_mut()
@@ -470,12 +468,6 @@ impl Coupling {
     ) {
         let lagged = self.friction_limit.get(i).copied().unwrap_or_default();
         for (n, surface) in normals.normals().iter().zip(normals.surfaces()) {
-            if *surface != Vec3::ZERO {
-                // A moving surface does work through friction, and under a kinematic squeeze
-                // its normal force is unbounded: its friction stays with the collision stage,
-                // bounded by the normal impulses there.
-                continue;
-            }
             let limit = match lagged.iter().find(|l| l.1 > 0.0 && l.0.dot(*n) > 0.9) {
                 Some(l) => l.1,
                 None => mu * (-f.dot(*n)).max(0.0),

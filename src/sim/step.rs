@@ -330,10 +330,11 @@ impl Simulation {
     }
 
     /// Moving obstacles do work on the cloth inside the solve: through the springs on their
-    /// features (a link carrying the cloth) and through the filter holding a vertex at a moving
-    /// surface's velocity (a ball pushing it). Both are work from outside: the springs' end
-    /// forces and the held vertices' constraint impulses over `h` join `work.fext` (zeroed first
-    /// when `external` says it holds nothing). Returns whether `work.fext` now holds external
+    /// features (a link carrying the cloth), through the filter holding a vertex at a moving
+    /// surface's velocity (a ball pushing it) and through that surface's friction (a forearm
+    /// dragging a hem). All are work from outside: the springs' end forces, the held vertices'
+    /// constraint impulses over `h` and the friction drags' end forces join `work.fext` (zeroed
+    /// first when `external` says it holds nothing). Returns whether `work.fext` now holds external
     /// forces. Nothing is added where nothing moves (bit for bit what the guard did before).
     fn moving_contact_work(&mut self, external: bool, h: f64) -> bool {
         let c = &self.coupling.constraints;
@@ -348,7 +349,11 @@ impl Simulation {
         };
         let n = self.cloth.len();
         let any_held = impulses.is_some() && (0..n).any(held_moving);
-        if !any_held && (springs.is_empty() || !self.model.caps.solves_contacts) {
+        let rubbed = &report.moving_friction;
+        if !any_held
+            && rubbed.is_empty()
+            && (springs.is_empty() || !self.model.caps.solves_contacts)
+        {
             return external;
         }
         let fext = &mut self.work.fext;
@@ -366,6 +371,9 @@ impl Simulation {
             for i in (0..n).filter(|&i| held_moving(i)) {
                 fext[i] += r[i] / h;
             }
+        }
+        for &(i, f) in rubbed.iter().filter(|r| (r.0 as usize) < n) {
+            fext[i as usize] += f;
         }
         true
     }

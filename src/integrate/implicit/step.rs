@@ -204,6 +204,12 @@ impl Implicit {
             v[i] += self.dv[i];
             x[i] += v[i] * h;
         }
+        report.moving_friction.clear();
+        report.moving_friction.extend(
+            (self.drags.iter())
+                .filter(|g| g.reference != Vec3::ZERO)
+                .map(|g| (g.vertex as u32, g.force(v[g.vertex]))),
+        );
         report.contact_forces.clear();
         report
             .contact_forces
