@@ -11,8 +11,10 @@
 //! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
 //! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the material);
 //! `DRAPE_BENCH_LINEARISATION=0.2` sets `solver.linearisation_tolerance` (Newton iterations while
-//! a spring stretches more than that beyond its linearised prediction; 1e9: the energy check alone). It uses only `Simulation`'s public metrics, so the same file runs on an older
-//! checkout for a ratio in one session.
+//! a spring stretches more than that beyond its linearised prediction; 1e9: the energy check
+//! alone); `DRAPE_BENCH_SUBSTEPS=4` sets `solver.substeps` (the is 1: what the step size
+//! contributes to the stretch). It uses only `Simulation`'s public metrics, so the same file
+//! runs on an older checkout for a ratio in one session.
 
 use drape::cloth::topology::{springs, SpringKind};
 use drape::scene::Scene;
@@ -73,6 +75,14 @@ fn load(file: &str, res: usize) -> Simulation {
         .and_then(|t| t.parse().ok())
     {
         s.solver.linearisation_tolerance = t;
+    }
+    // Not the settings either: substeps per 1/60 s frame, to see what the step size
+    // contributes to the landing's stretch.
+    if let Some(n) = std::env::var("DRAPE_BENCH_SUBSTEPS")
+        .ok()
+        .and_then(|n| n.parse().ok())
+    {
+        s.solver.substeps = n;
     }
     s.build().expect("valid scene")
 }
