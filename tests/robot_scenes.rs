@@ -181,28 +181,25 @@ fn cape_stays_out_of_the_swinging_arms() {
     assert!(reported < 0.1 * 0.008, "stage reports {reported} m");
 }
 
-/// robot_cape.yaml at 48x48 (its full-resolution hard case) with self-collision on: at t =
-/// 2.45-2.5 s the left forearm sweeps through the cape's hem at about 0.7 m/s, carrying the hem
-/// held against it by friction. That friction is solved with the cloth (a drag towards the
-/// forearm's velocity), so the hem's neighbours follow within the same solve. Applied by the
-/// collision stage after the solve, it moved each held vertex alone by up to its whole slip over
-/// the substep (3.9 mm of a 12.8 mm spacing) and stretched the hem's edges to 1.20x rest in
-/// every substep of the sweep (1.23x without self-collision). Bound: issue 18's impact bound at
-/// the arms' 1.2 m/s plus 10 % (`src/hard/self_contact.rs`, `cape_swinging`), on every frame.
+/// robot_cape.yaml at 48x48 with self-collision on (its full-resolution hard case,
+/// `self_cape_under_swinging_arms`, run here to t = 2.6 s): at t = 2.45-2.5 s the left forearm
+/// sweeps through the cape's hem at about 0.7 m/s, carrying the hem held against it by
+/// friction. That friction is solved with the cloth (a drag towards the forearm's velocity), so
+/// the hem's neighbours follow within the same solve. Applied by the collision stage after the
+/// solve, it moved each held vertex alone by up to its whole slip over the substep (3.9 mm of a
+/// 12.8 mm spacing) and stretched the hem's edges to 1.20x rest in every substep of the sweep
+/// (1.23x without self-collision). Bound: the case's own, issue 18's impact bound at the arms'
+/// 1.2 m/s plus 10 % (`src/hard/self_contact.rs`, `cape_swinging`), on every frame.
 #[test]
 fn the_forearm_sweeping_the_cape_drags_its_hem_without_stretching_it() {
-    let mut scene = load("robot_cape.yaml");
-    scene
-        .cloths
-        .iter_mut()
-        .for_each(|c| c.grid.resolution = [48, 48]);
-    scene.collision.self_collision = true;
-    let material = &scene.cloths[0].material;
-    let (speed, area) = (1.2, 0.6 * 0.6);
-    let wave = (material.stretch / material.density).sqrt();
-    let bound = 1.1 * (1.0 + speed / wave + material.density * area * 9.81 / material.stretch);
-    let (mut sim, driver) = scene.build_with_robot().expect("builds");
-    let mut driver = driver.expect("robot scene");
+    use drape::hard::{catalogue, Resolution};
+    let (_, build) = catalogue()
+        .into_iter()
+        .find(|(n, _)| *n == "self_cape_under_swinging_arms")
+        .expect("the hard case");
+    let case = build(Resolution::Full).expect("builds");
+    let bound = case.criteria.max_stretch.expect("a stretch bound");
+    let (mut sim, mut driver) = (case.sim, case.driver.expect("robot scene"));
     let dt = sim.settings.dt;
     let mut worst = (0.0f64, 0.0);
     while sim.time() < 2.6 {
