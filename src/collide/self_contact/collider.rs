@@ -41,6 +41,10 @@ pub(crate) struct SelfCollider {
     /// in order with the near pairs' (`proximity::near_answers`).
     pub(super) found_vt: Vec<Keyed>,
     pub(super) found_near: Vec<Keyed>,
+    /// The near pairs whose boxes overlapped at the last refit (`proximity::near_answers`),
+    /// valid while `near_kept_valid` (a refit clears it).
+    pub(super) near_kept: Vec<(u32, u32)>,
+    pub(super) near_kept_valid: bool,
     /// The pairs of two layers this substep's repulsion answered (see [`super::SelfTouch`]).
     pub(super) touches: Vec<SelfTouch>,
     pub(super) w: Vec<f64>,
@@ -106,6 +110,8 @@ impl SelfCollider {
             pairs_ee: Vec::new(),
             found_vt: Vec::new(),
             found_near: Vec::new(),
+            near_kept: Vec::new(),
+            near_kept_valid: false,
             touches: Vec::new(),
             w: Vec::new(),
             parent: Vec::new(),

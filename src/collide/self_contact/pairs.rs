@@ -100,6 +100,8 @@ impl SelfCollider {
         let Some(bvh) = self.bvh.as_mut() else {
             return;
         };
+        // New boxes: the near pairs kept on the old ones are stale.
+        self.near_kept_valid = false;
         let (tris, edges, bits) = (&self.triangles, &self.edges, &self.seam_bits);
         match (retest, changed) {
             (Some(_), Some(flags)) => bvh.refit_changed(tris, edges, xb, flags),
