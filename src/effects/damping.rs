@@ -43,14 +43,11 @@ impl Effect for SpringDamping {
     }
     fn add_jacobians(&self, s: &State, _dfdx: &mut BlockCsr, dfdv: &mut BlockCsr) {
         let slots = self.slots.get(dfdv, self.pairs.iter().copied());
-        for ((&(i, j), &kd), sl) in self.pairs.iter().zip(&self.kd).zip(&slots.1) {
+        dfdv.add_pairs(&slots.1, |q| {
+            let (i, j) = self.pairs[q];
             let n = (s.x[i as usize] - s.x[j as usize]).normalize_or_zero();
-            let m = outer(n, n) * -kd;
-            dfdv.add_at(sl[0], m);
-            dfdv.add_at(sl[1], m);
-            dfdv.add_at(sl[2], -m);
-            dfdv.add_at(sl[3], -m);
-        }
+            outer(n, n) * -self.kd[q]
+        });
     }
 }
 

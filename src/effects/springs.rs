@@ -262,10 +262,11 @@ impl Effect for Springs {
         let slots = self
             .slots
             .get(dfdx, self.springs.iter().map(|s| (s.i, s.j)));
-        for ((s, &k), sl) in self.springs.iter().zip(&self.k).zip(&slots.1) {
+        dfdx.add_pairs(&slots.1, |q| {
+            let (s, k) = (&self.springs[q], self.k[q]);
             let d = st.x[s.i as usize] - st.x[s.j as usize];
             let len = d.length();
-            let kii = if len > 0.0 {
+            if len > 0.0 {
                 let n = d / len;
                 let nn = outer(n, n);
                 let transverse = (1.0 - s.rest / len).max(0.0);
@@ -273,12 +274,8 @@ impl Effect for Springs {
             } else {
                 // Degenerate spring: keep the matrix definite with an isotropic stiffness.
                 Mat3::IDENTITY * -k
-            };
-            dfdx.add_at(sl[0], kii);
-            dfdx.add_at(sl[1], kii);
-            dfdx.add_at(sl[2], -kii);
-            dfdx.add_at(sl[3], -kii);
-        }
+            }
+        });
     }
 
     /// A spring under strain `e` has transverse stiffness `k e / (1 + e)` (the `1 - l/L` term
