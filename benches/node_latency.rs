@@ -404,14 +404,17 @@ impl std::fmt::Display for Solver {
 
 /// Rows: DDS (the README table) and the same pipeline without DDS (channels straight to the
 /// simulation thread), which separates the node's own latency from the middleware's.
-/// `DRAPE_LATENCY_ROWS=direct` runs only the latter (quick iterations on the pipeline).
+/// `DRAPE_LATENCY_ROWS=direct` runs only the latter (quick iterations on the pipeline), `self`
+/// only the self-collision row of issue 16's acceptance.
 fn main() {
     if !netns::enter("node_latency") {
         return;
     }
-    let only_direct = std::env::var("DRAPE_LATENCY_ROWS").is_ok_and(|v| v == "direct");
+    let rows = std::env::var("DRAPE_LATENCY_ROWS").unwrap_or_default();
     let mut plan = Vec::new();
-    if !only_direct {
+    if rows == "self" {
+        plan.push((64, Solver::AdaptiveSelf, true));
+    } else if rows != "direct" {
         plan.extend([
             (24, Solver::Scene, true),
             (64, Solver::Scene, true),
@@ -420,7 +423,9 @@ fn main() {
             (64, Solver::AdaptiveSelfUnlimited, true),
         ]);
     }
-    plan.extend([(24, Solver::Scene, false), (64, Solver::Adaptive, false)]);
+    if rows != "self" {
+        plan.extend([(24, Solver::Scene, false), (64, Solver::Adaptive, false)]);
+    }
     let rows: Vec<Row> = plan
         .into_iter()
         .map(|(res, solver, dds)| measure(res, solver, dds))
