@@ -95,21 +95,19 @@ pub(super) fn across_seam(seam_bits: &[u64], a: &[u32], b: &[u32]) -> bool {
     !seam_bits.is_empty() && bits(seam_bits, a) & bits(seam_bits, b) != 0
 }
 
-/// Whether point `p` is surely at least `r` from the triangle `t`: farther than `r` from its
-/// centroid by more than the centroid's distance to its farthest corner. A bound before the
-/// closest point, which most of a rest neighbourhood's pairs fail (the lists keep only pairs
-/// nearer than `FOLD_ARC` gaps); the slack keeps round-off on the listing side.
-fn beyond(p: Vec3, t: &[Vec3; 3], r: f64) -> bool {
-    let c = (t[0] + t[1] + t[2]) / 3.0;
-    let reach = t.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
-    (p - c).length() - reach > r * (1.0 + 1e-9) + 1e-12
+/// A ball holding an element: its centroid and the distance to its farthest vertex.
+fn ball(points: &[Vec3]) -> (Vec3, f64) {
+    let c = points.iter().copied().sum::<Vec3>() / points.len().max(1) as f64;
+    let reach = points.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
+    (c, reach)
 }
 
-/// Whether segments `a0 a1` and `b0 b1` are surely at least `r` apart: their midpoints farther
-/// than `r` plus their half lengths (the same bound as [`beyond`]).
-fn apart(a0: Vec3, a1: Vec3, b0: Vec3, b1: Vec3, r: f64) -> bool {
-    let reach = 0.5 * ((a1 - a0).length() + (b1 - b0).length());
-    (0.5 * ((a0 + a1) - (b0 + b1))).length() - reach > r * (1.0 + 1e-9) + 1e-12
+/// Whether two elements in balls `a` and `b` are surely at least `r` apart: their centres
+/// farther than `r` plus both reaches. A bound before the closest point, which most of a rest
+/// neighbourhood's pairs fail (the lists keep only pairs nearer than `FOLD_ARC` gaps); the
+/// slack keeps round-off on the listing side.
+fn apart(a: (Vec3, f64), b: (Vec3, f64), r: f64) -> bool {
+    (a.0 - b.0).length() - a.1 - b.1 > r * (1.0 + 1e-9) + 1e-12
 }
 
 impl SelfCollider {
@@ -161,6 +159,11 @@ impl SelfCollider {
         // Rows in parallel; each element is tested once per row (a stamp per thread), not once
         // per incident vertex of the neighbourhood.
         let (tris, edges) = (&self.triangles, &self.edges);
+        // Each element's ball once, for the bound before every closest point (NaN, so never
+        // apart, for an element past the vertices seen).
+        let at = |i: u32| x.get(i as usize).copied().unwrap_or(Vec3::NAN);
+        let tri_balls: Vec<(Vec3, f64)> = tris.iter().map(|t| ball(&t.map(at))).collect();
+        let edge_balls: Vec<(Vec3, f64)> = edges.iter().map(|e| ball(&e.map(at))).collect();
         let vt_rows: Vec<[Vec<u32>; 3]> = (0..n)
             .into_par_iter()
             .map_init(
@@ -182,7 +185,7 @@ impl SelfCollider {
                             let [a, b, c] = tri.map(|i| x[i as usize]);
                             let gap =
                                 th[p] + tri.map(|i| th[i as usize]).into_iter().fold(0.0, f64::max);
-                            if !ring && beyond(x[p], &[a, b, c], FOLD_ARC * gap) {
+                            if !ring && apart((x[p], 0.0), tri_balls[t as usize], FOLD_ARC * gap) {
                                 continue;
                             }
                             let (cp, _) = narrow::point_triangle_closest(x[p], a, b, c);
@@ -218,7 +221,7 @@ impl SelfCollider {
                             stamp[f as usize] = k as u32;
                             let [b0, b1] = g.map(|i| i as usize);
                             let gap = th[a0].max(th[a1]) + th[b0].max(th[b1]);
-                            if apart(x[a0], x[a1], x[b0], x[b1], FOLD_ARC * gap) {
+                            if apart(edge_balls[k], edge_balls[f as usize], FOLD_ARC * gap) {
                                 continue;
                             }
                             let (_, _, ca, cb) =
@@ -303,13 +306,13 @@ mod tests {
         for _ in 0..20_000 {
             let r = 0.01;
             let (p, t) = (v(), [v(), v(), v()]);
-            if beyond(p, &t, r) {
+            if apart((p, 0.0), ball(&t), r) {
                 let (cp, _) = narrow::point_triangle_closest(p, t[0], t[1], t[2]);
                 assert!((cp - p).length() >= r, "{p:?} {t:?}");
                 skipped += 1;
             }
             let (a0, a1, b0, b1) = (v(), v(), v(), v());
-            if apart(a0, a1, b0, b1, r) {
+            if apart(ball(&[a0, a1]), ball(&[b0, b1]), r) {
                 let (_, _, ca, cb) = narrow::segment_segment_closest(a0, a1, b0, b1);
                 assert!((ca - cb).length() >= r, "{a0:?} {a1:?} {b0:?} {b1:?}");
                 skipped += 1;
