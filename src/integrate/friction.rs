@@ -29,7 +29,8 @@
 //! only those slide that Coulomb would not stop against the last load, so a reversal needs the
 //! load to drop within the step). Refitting both ways, with modes from the start slip only,
 //! chattered on a cloth draped over a sphere: 64 of ~900 held vertices changed mode after
-//! every solve, each step solved 2.9 times (README, "The solve under contact").
+//! every solve, each step solved 2.9 times (README, "The solve under contact": why the
+//! iterations rise).
 
 use crate::linalg::outer;
 use crate::linalg::BlockCsr;
