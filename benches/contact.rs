@@ -6,8 +6,9 @@
 //! (the steps alone, scene build excluded), p99 and max structural edge stretch (length over
 //! rest, worst frame of the run and at the end), the deepest vertex below the sphere's radius
 //! (S1), CG iterations per frame (mean and max, and for S1 split into the frames before the
-//! first contact and those with contacts), force evaluations per frame and the contacts at the
-//! end. `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
+//! first contact and those with contacts), force evaluations per frame, the contacts at the
+//! end, and where a frame's wall time went: the CG iterations, the collision stage and the rest
+//! (assembly, the multigrid's setup and updates, the Newton checks, the guard). `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
 //! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
 //! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the issue's material);
 //! `DRAPE_BENCH_LINEARISATION=0.2` sets `solver.linearisation_tolerance` (Newton iterations while
@@ -31,6 +32,9 @@ struct Run {
     frames: usize,
     wall_s: f64,
     sim_s: f64,
+    /// Wall time in the CG iterations and in the collision stage (s, summed over the run).
+    cg_s: f64,
+    collision_s: f64,
     /// Worst frame's p99 and max structural stretch, and the end state's.
     p99_worst: f64,
     max_worst: f64,
@@ -125,6 +129,7 @@ fn run(file: &str, res: usize, sphere: bool) -> Run {
         let t = Instant::now();
         let m = sim.step().expect("bench scene stays stable").clone();
         r.wall_s += t.elapsed().as_secs_f64();
+        (r.cg_s, r.collision_s) = (r.cg_s + m.cg_time_s, r.collision_s + m.collision_time_s);
         r.cg.push(m.cg_iterations);
         touched |= m.contacts > 0;
         if m.contacts > 0 {
@@ -184,7 +189,7 @@ fn main() {
         "scene res | wall s / sim s | stretch p99 max (worst frame) at frame, frames over 1.02 | \
          p99 max (end) | \
          penetration below r (m, frames) | CG/frame mean max | before contact | with contact \
-         | force evals/frame | subdiv | contacts end max"
+         | force evals/frame | subdiv | contacts end max | ms/frame: CG, collision, rest"
     );
     let mut table = Vec::new();
     for res in &resolutions {
@@ -200,7 +205,7 @@ fn main() {
             let r = run(file, *res, sphere);
             println!(
                 "{} {res}x{res} | {:.3} | {:.4} {:.4} at {}, {} | {:.4} {:.4} | {:.2e} {} | {:.1} {} | {:.1} {} \
-                 | {:.1} {} | {:.2} | {} | {} {}",
+                 | {:.1} {} | {:.2} | {} | {} {} | {:.1} {:.1} {:.1}",
                 scene.to_uppercase(),
                 r.wall_s / r.sim_s,
                 r.p99_worst,
@@ -221,6 +226,9 @@ fn main() {
                 r.subdivisions,
                 r.contacts_end,
                 r.contacts_max,
+                1e3 * r.cg_s / r.frames as f64,
+                1e3 * r.collision_s / r.frames as f64,
+                1e3 * (r.wall_s - r.cg_s - r.collision_s) / r.frames as f64,
             );
             table.push((scene.clone(), *res, r));
         }
