@@ -1,6 +1,7 @@
 //! Issue 16's benchmark: scene S1 (a 1 m cloth dropped flat onto a fixed sphere, 2 s,
 //! `benches/scenes/bench_s1.yaml`) and S2 (the same cloth hanging from two corners, no contact,
-//! `benches/scenes/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole simulation.
+//! `benches/scenes/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole
+//! simulation.
 //!
 //! `cargo bench --bench contact` prints one row per run: wall seconds per simulated second
 //! (the steps alone, scene build excluded), p99 and max structural edge stretch (length over
@@ -8,8 +9,9 @@
 //! (S1), CG iterations per frame (mean and max, and for S1 split into the frames before the
 //! first contact and those with contacts), force evaluations per frame, the contacts at the
 //! end, and where a frame's wall time went: the CG iterations, the collision stage and the rest
-//! (assembly, the multigrid's setup and updates, the Newton checks, the guard). `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1`
-//! scenes, `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
+//! (assembly, the multigrid's setup and updates, the Newton checks, the guard).
+//! `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1` scenes,
+//! `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
 //! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the issue's material);
 //! `DRAPE_BENCH_LINEARISATION=0.2` sets `solver.linearisation_tolerance` (Newton iterations while
 //! a spring stretches more than that beyond its linearised prediction; 1e9: the energy check

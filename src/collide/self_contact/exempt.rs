@@ -182,12 +182,12 @@ impl SelfCollider {
                                 continue;
                             }
                             stamp[t as usize] = p as u32;
-                            let [a, b, c] = tri.map(|i| x[i as usize]);
                             let gap =
                                 th[p] + tri.map(|i| th[i as usize]).into_iter().fold(0.0, f64::max);
                             if !ring && apart((x[p], 0.0), tri_balls[t as usize], FOLD_ARC * gap) {
                                 continue;
                             }
+                            let [a, b, c] = tri.map(|i| x[i as usize]);
                             let (cp, _) = narrow::point_triangle_closest(x[p], a, b, c);
                             let d = (cp - x[p]).length();
                             if d < gap {
