@@ -129,7 +129,7 @@ fn run(file: &str, res: usize, sphere: bool) -> Run {
     let mut touched = false;
     for f in 0..frames {
         let t = Instant::now();
-        let m = sim.step().expect("bench scene stays stable").clone();
+        let m = sim.step().expect("bench scene stays stable");
         r.wall_s += t.elapsed().as_secs_f64();
         (r.cg_s, r.collision_s) = (r.cg_s + m.cg_time_s, r.collision_s + m.collision_time_s);
         r.cg.push(m.cg_iterations);

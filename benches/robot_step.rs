@@ -53,7 +53,7 @@ fn run(res: usize, preview: bool) -> Split {
         let t_next = sim.time() + sim.settings.dt;
         driver.advance(&mut sim, t_next);
         let t1 = Instant::now();
-        let m = sim.step().expect("robot_towel runs").clone();
+        let m = sim.step().expect("robot_towel runs");
         let t2 = Instant::now();
         let c = &sim.cloth;
         let normals = c.vertex_normals();

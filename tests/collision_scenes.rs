@@ -44,7 +44,7 @@ fn drape_on_sphere_never_penetrates_beyond_a_tenth_of_thickness() {
         let mut sim = scene.build().unwrap();
         let mut touching = 0;
         for _ in 0..120 {
-            let m = sim.step().unwrap().clone();
+            let m = sim.step().unwrap();
             assert!(
                 m.deepest_penetration < 0.1 * th,
                 "{mode:?}: stage reports {}",

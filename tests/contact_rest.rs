@@ -269,7 +269,7 @@ fn a_sheet_draped_over_a_box_corner_lies_still() {
             .collect();
         let (mut stretch, mut subdivisions, mut speed) = (0.0f64, 0, 0.0f64);
         for k in 0..180 {
-            let m = sim.step().unwrap_or_else(|e| panic!("{e}")).clone();
+            let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
             if k < 60 {
                 continue;
             }

@@ -70,7 +70,7 @@ fn run(seconds: f64) -> Worst {
         elastic: 0.0,
     };
     for _ in 0..steps {
-        let m = sim.step().unwrap_or_else(|e| panic!("{e}")).clone();
+        let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
         w.speed = w.speed.max(m.max_speed);
         w.penetration = w.penetration.max(m.deepest_penetration);
         w.elastic = w.elastic.max(sim.effects().energy_split(&sim.cloth.x).0);

@@ -60,7 +60,7 @@ fn sleeve_sews_into_a_tube_and_stays_on_the_moving_arm() {
     for _ in 0..steps {
         let next = sim.time() + sim.settings.dt;
         driver.advance(&mut sim, next);
-        let m = sim.step().unwrap().clone();
+        let m = sim.step().unwrap();
         assert!(m.max_speed < 5.0, "t {}: speed {}", m.time, m.max_speed);
         // Still around the arm: the centroid stays within 10 cm of the arm (upper arm or forearm).
         let pose = driver.link_poses()[arm];

@@ -31,7 +31,7 @@ fn implicit_step_accepts_an_arm_jump_and_the_energy_then_decays() {
     let (t, dt) = (sim.time(), sim.settings.dt);
     driver.set_source(JointSource::Stream(vec![(t, q0), (t + dt, q1)]), t);
     driver.advance(&mut sim, t + dt);
-    let m = sim.step().expect("the jump step").clone();
+    let m = sim.step().expect("the jump step");
     // Before the driven vertices' end forces were counted the guard subdivided this step five
     // times; the end-force bound still falls short of the gain on a coarse towel (the
     // 64x64 one takes the jump whole), so one halving is allowed.

@@ -24,7 +24,7 @@ fn stiff_implicit_cloth_steps_without_subdivisions_or_energy_gain() {
         cg += m.cg_iterations;
         // One force evaluation for Baraff-Witkin's solve, one for the energy check.
         newton_frames += u32::from(m.force_evaluations > 2 * m.substeps);
-        let e = energy(m);
+        let e = energy(&m);
         // Pinned corners, no wind: nothing does work on the cloth and damping only dissipates,
         // so the total energy never rises (beyond the energy sums' round-off).
         assert!(

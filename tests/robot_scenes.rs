@@ -453,7 +453,7 @@ fn a_link_that_stopped_is_still_in_the_next_frame() {
         }
         driver.set_source(JointSource::Stream(vec![(t, q0), (t + dt, q.clone())]), t);
         driver.advance(&mut sim, t + dt);
-        let m = sim.step().unwrap().clone();
+        let m = sim.step().unwrap();
         let poses: Vec<Pose> = (sim.collision().unwrap().obstacles().iter())
             .map(|o| o.pose)
             .collect();

@@ -213,7 +213,7 @@ fn a_heap_stays_above_the_ground_and_its_penetration_is_reported() {
         let mut sim = scene.build().expect("crumple builds");
         let frames = (scene.duration / sim.settings.dt).round() as usize;
         for f in 0..frames {
-            let m = sim.step().expect("no divergence").clone();
+            let m = sim.step().expect("no divergence");
             let (i, z) = sim
                 .cloth
                 .x

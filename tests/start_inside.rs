@@ -98,7 +98,7 @@ fn run(scene: &Scene, seconds: f64, judged: impl Fn(usize, usize) -> bool) -> Ju
             let t = sim.time() + sim.settings.dt;
             d.advance(&mut sim, t);
         }
-        let exiting = match sim.step().cloned() {
+        let exiting = match sim.step() {
             Ok(m) => {
                 j.subdivisions += m.subdivisions;
                 m.exiting_vertices

@@ -36,7 +36,7 @@ fn run(scene: &Scene, limit: Option<f64>) -> Run {
     let mut worst: f64 = 0.0;
     let (mut worst_excess, mut last_excess): (f64, f64) = (0.0, 0.0);
     for _ in 0..frames {
-        let m = sim.step().expect("no divergence").clone();
+        let m = sim.step().expect("no divergence");
         let stretch = sim.cloth.max_edge_stretch();
         assert!(stretch.is_finite());
         match limit {
@@ -110,7 +110,7 @@ fn diagnostics_carry_the_limit_only_where_a_scene_sets_one() {
         let mut sim = scene.build().unwrap();
         let mut f = FrameQuality::default();
         for _ in 0..30 {
-            f.add_step(sim.step().unwrap());
+            f.add_step(&sim.step().unwrap());
         }
         f.at_frame(sim.time(), &sim.cloth);
         let d = f.diagnostics("drape", drape::ros::msg::Time::default(), false);

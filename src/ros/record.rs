@@ -364,7 +364,7 @@ fn run(
         })?;
         s.steps += 1;
         s.subdivisions += m.subdivisions as u64;
-        quality.add_step(m);
+        quality.add_step(&m);
         if sim.time() + eps >= next_publish {
             frame(sim, driver.as_deref(), bag, s.frames_written, &mut quality)?;
             s.quality.add_frame(&quality);

@@ -124,3 +124,51 @@ impl fmt::Display for CauseText<'_> {
         }
     }
 }
+
+/// The error for a substep `(t, h)` that failed at `vertex` (flat index) with `symptom`.
+/// An effect is blamed only when the step is over the integrator's stability bound
+/// `h omega > limit` (`omega_bound` the bound on the cloth's highest angular frequency, known
+/// where the integrator has a limit): the one contributing the largest `omega^2`.
+/// Otherwise (within the bound, or an integrator without one) the error reports what the guard
+/// measured and suggests no step size.
+pub(super) fn divergence_error(
+    (cloth, effects): (&crate::cloth::Cloth, &crate::effects::EffectSet),
+    integrator: &'static str,
+    (stability_limit, omega_bound): (Option<f64>, Option<f64>),
+    (t, h): (f64, f64),
+    vertex: usize,
+    symptom: Symptom,
+) -> DivergenceError {
+    let (name, local) = match cloth.piece_of(vertex) {
+        Some(p) => (p.name.clone(), vertex - p.first_vertex),
+        None => (String::from("?"), vertex),
+    };
+    let cause = match stability_limit {
+        None => Cause::Unknown,
+        Some(limit) if limit <= 0.0 => Cause::NoStableStep,
+        Some(limit) => {
+            let h_omega = h * omega_bound.unwrap_or(0.0);
+            let stiffest = effects
+                .stiffness(&cloth.mass)
+                .into_iter()
+                .max_by(|a, b| a.omega_sq.total_cmp(&b.omega_sq));
+            match stiffest {
+                Some(b) if h_omega > limit => Cause::Unstable {
+                    parameter: b.parameter,
+                    h_omega,
+                    limit,
+                },
+                _ => Cause::Unknown,
+            }
+        }
+    };
+    DivergenceError {
+        time: t,
+        step: h,
+        cloth: name,
+        vertex: local,
+        symptom,
+        integrator,
+        cause,
+    }
+}

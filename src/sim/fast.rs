@@ -28,39 +28,17 @@ use crate::{Pose, Vec3};
 /// Largest motion of an obstacle relative to the cloth near it within one substep, in local
 /// cloth spacings. A vertex the obstacle reaches is put on its surface after the solve (the
 /// solver holds it from the next substep on), so the jump stretches its edges by up to this
-/// fraction; a third keeps the carried cloth of the issue-18 sheet within `1 + v / c` of the
-/// impact at 5 and 20 m/s (measured in `tests/fast_links.rs`: a half let a 5 m/s rod stretch
-/// edges to 1.27, a tenth cost three times the substeps for no gain).
+/// fraction; a third keeps the cloth a rod carries within the impact strain `1 + v / c`
+/// (`tests/fast_links.rs`), where a half does not and a tenth costs substeps for no gain.
 pub(super) const REACH: f64 = 1.0 / 3.0;
 
 /// How far around an obstacle that touches the cloth a vertex is within reach, in the cloth's
 /// longest spacing (plus the thickness): two rings of edges. The vertices next to the ones a
 /// link carries trail behind it until the solve takes them along; with one ring a substep long
 /// enough to carry the cloth 1.5 spacings was allowed as soon as the first row moved with the
-/// link, and the solve left the trailing edges 1.19 times their length at 5 m/s. Allowing the
-/// second ring twice the motion (its edges share it) broke the same bound (1.19-1.21).
+/// link, and the solve left the trailing edges stretched beyond the impact bound; so does
+/// allowing the second ring twice the motion (its edges share it).
 pub(super) const REACH_RINGS: f64 = 2.0;
-
-/// The start and end pose of obstacle `o` over the substep `[t, t + h]` at frame fractions
-/// `s0..s1` (`target`: its frame's start and end pose when driven from outside).
-pub(super) fn substep_poses(
-    o: &Obstacle,
-    target: Option<&(Pose, Pose)>,
-    (t, h): (f64, f64),
-    (s0, s1): (f64, f64),
-) -> (Pose, Pose) {
-    if o.motion.is_scripted() {
-        (
-            o.motion.pose_at(&o.initial_pose, t),
-            o.motion.pose_at(&o.initial_pose, t + h),
-        )
-    } else {
-        match target {
-            Some((a, b)) => (a.lerp(b, s0), a.lerp(b, s1)),
-            None => (o.pose, o.pose),
-        }
-    }
-}
 
 /// The obstacle's local bounding box corners (none for unbounded shapes).
 fn corners(o: &Obstacle) -> Option<[Vec3; 8]> {
@@ -118,9 +96,9 @@ impl Reach {
 /// vertex's layer within the substep (its start distance, less the thickness, is at most that
 /// motion) or, while the obstacle touches the cloth (a vertex within a spacing of its layer),
 /// to the vertices that trail the ones it carries ([`Reach::trailing`]). Cloth the link carries
-/// along far ahead of it (a towel's flaps swinging around a bar, 13 cm from it) is not: counted
-/// by the swept box alone, such vertices took the issue-18 rod from 7.3 to 9.0 substeps a frame
-/// (`benches/fast_links.rs`). `near` is scratch.
+/// along far ahead of it (a towel's flaps swinging around a bar) is not: counted by the swept
+/// box alone, such vertices would split substeps for cloth no obstacle is about to meet
+/// (`benches/fast_links.rs` measures the substeps). `near` is scratch.
 pub(super) fn outruns(
     o: &Obstacle,
     (a, b): (Pose, Pose),
@@ -174,7 +152,7 @@ pub(super) fn outruns(
 /// than [`REACH`] of its local spacing (`spacing`) from where the solve left it (`solved`), to
 /// `x`: the vertex jumped while its neighbours stayed, stretching its edges by up to that
 /// fraction. [`outruns`] predicts this for links; cloth the solve drives into a still obstacle
-/// (a towel swinging into an arm at 0.8 m/s, cloth landing on a seat) is only seen here, once
+/// (a towel swinging into an arm, cloth landing on a seat) is only seen here, once
 /// the pass has answered it. Only the vertices that jumped are asked about their contact.
 pub(super) fn jumped(
     solved: &[Vec3],

@@ -2,10 +2,10 @@
 //! times its rest length is shortened to that length, its two ends moved along it in proportion
 //! to their inverse masses (kinematic ends stay).
 //!
-//! Why: linear springs let a point load stretch cloth without limit. A sheet pinned at two
-//! corners and dragged by a rod stretches the edges at the pins 2.1-2.2x rest at 5 m/s and
-//! 5.2-5.5x at 20 m/s, the more the smaller the substep (`tests/fast_links.rs`), and real fabric
-//! does not: it stiffens sharply past a few percent. Stiffer springs would cost conditioning;
+//! Why: linear springs let a point load stretch cloth without limit (a sheet pinned at two
+//! corners and dragged by a rod stretches the edges at the pins several times their rest
+//! length, the more the faster the rod, `tests/fast_links.rs`), and real fabric does not: it
+//! stiffens sharply past a few percent. Stiffer springs would cost conditioning;
 //! the limit costs a few passes over the edges, and only where a material names it
 //! (`material.strain_limit`).
 //!
@@ -15,23 +15,21 @@
 //!   kinematic vertices (pins, attachments), and is put back on that sphere when it is not, its
 //!   velocity away from the anchor removed. A sheet hanging from two corner pins carries its
 //!   whole weight through the edges at the pins, and edge passes alone move that correction one
-//!   ring per pass (a 40-vertex chain 50 % over rest stays over after 32 passes); a tether
-//!   takes it in one step.
+//!   ring per pass (a 40-vertex chain 50 % over rest stays over after all the passes, see the
+//!   tests); a tether takes it in one step.
 //! - Edge passes: Gauss-Seidel over the edges, alternating direction, until no edge exceeds its
 //!   limit by more than [`SLACK`] of its allowed elongation or [`MAX_PASSES`] ran; what is left
 //!   is reported (`StepMetrics`). Velocities follow the moves over the substep (Provot), so the
 //!   cloth a rod drags feels the pins and slides: removing only the separating velocity left the
-//!   rod's contacts and the pins fighting every substep (2.8x rest at 20 m/s). But an edge's
-//!   ends get at most their relative speed as speed towards each other: on the short substeps
-//!   fast contact splits a frame into, a centimetre's correction over 65 us is 150 m/s, and the
-//!   corner-pinned sheet hit at 40 m/s diverged (836 m/s) with the plain update.
+//!   rod's contacts and the pins fighting every substep. But an edge's ends get at most their
+//!   relative speed as speed towards each other: on the short substeps fast contact splits a
+//!   frame into, a centimetre's correction over 65 us is 150 m/s, which Provot's plain update
+//!   would put into the cloth.
 //!
 //! The limit runs before the collision pass, which has the last word: its answers may stretch
-//! an edge again, and a pass after it moving the cloth unchecked let a 3 mm rod through the
-//! sheet. Measured on the corner-pinned sheet with tethers and the capped update: 1.29, 1.45 and
-//! 1.12 for a 3 mm capsule at 5, 20 and 40 m/s (without tethers 1.44, 1.51 and 2.15; with the
-//! plain update 1.29, 1.23 and a divergence); 2.31 for a 5 mm cylinder at 20 m/s, within the
-//! limit after the passes and stretched by the frame's last collision pass.
+//! an edge again (a pass after it, moving the cloth unchecked, would undo the collision pass's
+//! guarantee that no vertex crosses a surface). `tests/fast_links.rs` measures what is left on
+//! a sheet pinned at its corners and hit by a rod.
 //!
 //! Tethers are built once per set of kinematic vertices, one Dijkstra per anchor over the mesh:
 //! a grasp or a release that changes the set pays it again.
@@ -62,13 +60,12 @@ pub(super) struct StrainLimit {
     /// limit (`None`: not limited), for the tethers.
     neighbours: Vec<Vec<(u32, f64)>>,
     limit: Vec<Option<f64>>,
-    tethers: Tethers,
 }
 
-/// The tethers for one set of kinematic vertices (rebuilt when the set changes: a grasp, a
-/// release).
+/// The tethers for one set of kinematic vertices: a cache the step keeps, rebuilt when the set
+/// changes (a grasp, a release) or the cloth is replaced.
 #[derive(Debug, Clone, Default)]
-struct Tethers {
+pub(super) struct Tethers {
     /// The kinematic vertices they were built for, in the cloth's order.
     anchors: Vec<u32>,
     /// `(free vertex, anchor, longest allowed distance)`.
@@ -118,37 +115,42 @@ impl StrainLimit {
             edges,
             neighbours,
             limit,
-            tethers: Tethers::default(),
         })
     }
 
-    /// The tethers of the `kinematic` vertices (kept while the set stays the same).
-    fn tethers_for(&mut self, kinematic: &[(u32, Kinematic)]) -> &[(u32, u32, f64)] {
-        let same = self.tethers.anchors.len() == kinematic.len()
-            && (self.tethers.anchors.iter())
+    /// The tethers of the `kinematic` vertices, from `cache` while the set stays the same.
+    fn tethers_for<'a>(
+        &self,
+        cache: &'a mut Tethers,
+        kinematic: &[(u32, Kinematic)],
+    ) -> &'a [(u32, u32, f64)] {
+        let same = cache.anchors.len() == kinematic.len()
+            && (cache.anchors.iter())
                 .zip(kinematic)
                 .all(|(a, (k, _))| a == k);
         if !same {
             let anchors: Vec<u32> = kinematic.iter().map(|(k, _)| *k).collect();
-            self.tethers = Tethers {
+            *cache = Tethers {
                 list: tethers(&self.neighbours, &self.limit, &anchors),
                 anchors,
             };
         }
-        &self.tethers.list
+        &cache.list
     }
 
-    /// Holds `x` within the limit over the substep `h`: the tethers of the `kinematic` vertices,
-    /// then the edge passes (inverse masses `w`, 0 for kinematic vertices).
+    /// Holds `x` within the limit over the substep `h`: the tethers of the `kinematic` vertices
+    /// (kept in `cache`), then the edge passes (inverse masses `w`, 0 for kinematic vertices).
+    #[allow(clippy::too_many_arguments)]
     pub fn apply(
-        &mut self,
+        &self,
+        cache: &mut Tethers,
         x: &mut [Vec3],
         v: &mut [Vec3],
         w: &[f64],
         kinematic: &[(u32, Kinematic)],
         h: f64,
     ) -> LimitPass {
-        for &(i, a, allowed) in self.tethers_for(kinematic) {
+        for &(i, a, allowed) in self.tethers_for(cache, kinematic) {
             let (i, a) = (i as usize, a as usize);
             let d = x[i] - x[a];
             let len = d.length();
@@ -308,7 +310,6 @@ mod tests {
             edges,
             neighbours,
             limit: vec![Some(s); n],
-            tethers: Tethers::default(),
         };
         let x = (0..n)
             .map(|i| Vec3::new(stretch * i as f64, 0.0, 0.0))
@@ -324,7 +325,7 @@ mod tests {
 
     #[test]
     fn a_stretched_chain_ends_within_its_limit_and_keeps_its_momentum() {
-        let (mut limit, mut x, w, k) = chain(6, 1.2, false);
+        let (limit, mut x, w, k) = chain(6, 1.2, false);
         let x0 = x.clone();
         // Spreading apart at 1 m/s per edge.
         let v0: Vec<Vec3> = (0..6)
@@ -332,7 +333,7 @@ mod tests {
             .collect();
         let mut v = v0.clone();
         let h = 0.01;
-        let r = limit.apply(&mut x, &mut v, &w, &k, h);
+        let r = limit.apply(&mut Tethers::default(), &mut x, &mut v, &w, &k, h);
         assert_eq!(r.shortened, 5);
         assert_eq!(r.excess, 0.0);
         for e in 0..5 {
@@ -358,12 +359,12 @@ mod tests {
     /// over (a correction crosses one ring per pass).
     #[test]
     fn a_chain_pulled_from_its_pin_is_held_by_the_tethers() {
-        let (mut limit, mut x, w, k) = chain(40, 1.5, true);
+        let (limit, mut x, w, k) = chain(40, 1.5, true);
         let x0 = x[0];
         // Moving away from the pin at 1 m/s.
         let mut v = vec![Vec3::X; 40];
         v[0] = Vec3::ZERO;
-        let r = limit.apply(&mut x, &mut v, &w, &k, 0.01);
+        let r = limit.apply(&mut Tethers::default(), &mut x, &mut v, &w, &k, 0.01);
         assert_eq!(x[0], x0, "the pin stays");
         assert_eq!(r.excess, 0.0);
         assert!(x[39].x <= 39.0 * 1.1 + 1e-9, "{}", x[39].x);
@@ -372,17 +373,24 @@ mod tests {
             "nothing leaves the pin: {v:?}"
         );
         // Without tethers (no anchors), 32 edge passes leave the chain over its limit.
-        let (mut free, mut x, w, _) = chain(40, 1.5, true);
-        let r = free.apply(&mut x, &mut vec![Vec3::ZERO; 40], &w, &[], 0.01);
+        let (free, mut x, w, _) = chain(40, 1.5, true);
+        let r = free.apply(
+            &mut Tethers::default(),
+            &mut x,
+            &mut vec![Vec3::ZERO; 40],
+            &w,
+            &[],
+            0.01,
+        );
         assert!(r.excess > 0.05, "{}", r.excess);
     }
 
     #[test]
     fn edges_within_the_limit_are_left_alone() {
-        let (mut limit, mut x, w, k) = chain(3, 1.1, true);
+        let (limit, mut x, w, k) = chain(3, 1.1, true);
         let mut v = vec![Vec3::X; 3];
         let x0 = x.clone();
-        let r = limit.apply(&mut x, &mut v, &w, &k, 0.01);
+        let r = limit.apply(&mut Tethers::default(), &mut x, &mut v, &w, &k, 0.01);
         assert_eq!(r, LimitPass::default());
         assert_eq!((x, v), (x0, vec![Vec3::X; 3]));
     }
@@ -400,8 +408,9 @@ mod tests {
         c.add_panel(panel, material);
         c.pin(0);
         c.pin(2);
-        let mut limit = StrainLimit::of(&c).expect("a limited material");
-        let list = limit.tethers_for(&c.kinematic).to_vec();
+        let limit = StrainLimit::of(&c).expect("a limited material");
+        let mut cache = Tethers::default();
+        let list = limit.tethers_for(&mut cache, &c.kinematic).to_vec();
         assert_eq!(list.len(), 7 * 2);
         for (i, a, allowed) in list {
             let rest = c.uv[i as usize].distance(c.uv[a as usize]);
@@ -412,7 +421,7 @@ mod tests {
         }
         c.release(2);
         assert_eq!(
-            limit.tethers_for(&c.kinematic).len(),
+            limit.tethers_for(&mut cache, &c.kinematic).len(),
             8,
             "rebuilt for the one pin left"
         );

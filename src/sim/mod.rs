@@ -1,9 +1,10 @@
-//! The simulation: `Simulation::step` as a table of contents of named stages (`step`), what
-//! the simulation holds and what the outside may change between steps (`simulation`), the
-//! model and the scratch buffers (`model`), moving frames (`frames`), the solver–collision
-//! coupling both ways (`coupling`) with the impact front a link's drag sends (`front`), the
-//! divergence guard with its bookkeeping (`guard`, its vertex pass `scan`, its error `error`),
-//! energies (`energy`) and metrics (`metrics`).
+//! The simulation: `Simulation::step` as a table of contents of named stages (`step`) over a
+//! substep's `span`, what the simulation holds and what the outside may change between steps
+//! (`simulation`), the model and the work kept beside the state (`model`), moving frames
+//! (`frames`), the solver–collision coupling both ways (`coupling`) with the impact front a
+//! link's drag sends (`front`), the divergence guard with every redo decision (`guard`; the
+//! geometry of fast contact `fast`, the strain bound `strain`, its vertex pass `scan`, its
+//! error `error`), the strain limit (`limit`), energies (`energy`) and metrics (`metrics`).
 
 mod coupling;
 mod energy;
@@ -17,6 +18,7 @@ mod metrics;
 mod model;
 mod scan;
 mod simulation;
+mod span;
 mod step;
 mod strain;
 

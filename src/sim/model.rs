@@ -2,8 +2,8 @@
 //! apart from what evolves (the cloth's state, frames, clock, guard and coupling state), as
 //! MuJoCo keeps `mjModel` apart from `mjData`.
 
-use super::guard::GuardSettings;
-use super::limit::StrainLimit;
+use super::guard::{GuardSettings, OutsideForces, Saved};
+use super::limit::{StrainLimit, Tethers};
 use crate::cloth::Cloth;
 use crate::effects::EffectSet;
 use crate::integrate::{Capabilities, StepReport};
@@ -26,52 +26,69 @@ impl StepSettings {
 }
 
 /// The forces a scene named, what the integrator is, and what follows from them and the
-/// masses alone.
+/// masses alone; stepping never changes it.
 pub(super) struct Model {
     pub effects: EffectSet,
     /// What the integrator is (asked once, at construction).
     pub caps: Capabilities,
-    /// Upper bound of the cloth's highest angular frequency (rad/s), computed on first use.
-    omega_bound: Option<f64>,
+    /// Upper bound of the cloth's highest angular frequency (rad/s): the square root of the sum
+    /// over elastic effects of their Gershgorin bounds on `omega^2`. Only for an integrator with
+    /// a stability limit (the guard splits a substep over it up front), so an implicit scene
+    /// does not pay for it.
+    pub omega_bound: Option<f64>,
     /// The materials' strain limit (`None` when no material sets one).
     pub limit: Option<StrainLimit>,
 }
 
 impl Model {
     pub fn new(effects: EffectSet, caps: Capabilities, cloth: &Cloth) -> Self {
+        let omega_bound = (caps.stability_limit.is_some_and(|l| l > 0.0)).then(|| {
+            let sum: f64 = effects
+                .stiffness(&cloth.mass)
+                .iter()
+                .map(|b| b.omega_sq)
+                .sum();
+            sum.sqrt()
+        });
         Self {
             effects,
             caps,
-            omega_bound: None,
+            omega_bound,
             limit: StrainLimit::of(cloth),
         }
     }
 
-    /// Bound on the cloth's highest angular frequency (rad/s): the square root of the sum over
-    /// elastic effects of their Gershgorin bounds on `omega^2`, for the masses `mass`.
-    pub fn omega_bound(&mut self, mass: &[f64]) -> f64 {
-        let effects = &self.effects;
-        *self.omega_bound.get_or_insert_with(|| {
-            let sum: f64 = effects.stiffness(mass).iter().map(|b| b.omega_sq).sum();
-            sum.sqrt()
-        })
+    /// The integrator's stability limit on `h omega` with the cloth's frequency bound, where
+    /// it has one.
+    pub fn stability(&self) -> Option<(f64, f64)> {
+        self.caps.stability_limit.zip(self.omega_bound)
     }
 }
 
-/// Scratch buffers of a substep (any content is overwritten before it is read).
+/// What a substep keeps beside the state: its start state, the guard's saves for a rollback,
+/// caches that depend on the state (rebuilt when what they depend on changes) and scratch
+/// buffers (overwritten before they are read).
 #[derive(Debug, Default)]
 pub(super) struct Work {
-    /// The substep's start state, kept for the guard's rollback (swapped, not copied).
-    pub x_save: Vec<Vec3>,
-    pub v_save: Vec<Vec3>,
-    /// Forces at some state (start, end), for the coupling and the guard.
+    /// The substep's start state: the integrator starts from it, the collision pass sweeps from
+    /// it, the guard rolls back to it (swapped out of the cloth, not copied).
+    pub x_start: Vec<Vec3>,
+    pub v_start: Vec<Vec3>,
+    /// What a rollback after the collision pass needs (saved where the strain check applies).
+    pub saved: Saved,
+    /// The strain limit's tethers for the current set of kinematic vertices (a cache).
+    pub tethers: Tethers,
+    /// Scratch: forces at some state (start, end), for the coupling and the guard.
     pub scratch_f: Vec<Vec3>,
-    /// Forces from outside the cloth (wind, driven vertices) at the start of the substep.
-    pub fext: Vec<Vec3>,
-    /// Inverse masses for the collision stage (0 for kinematic vertices).
+    /// Forces from outside the cloth over the substep (wind, driven vertices, moving contacts),
+    /// for the guard's energy check.
+    pub outside: OutsideForces,
+    /// Scratch: inverse masses for the strain limit and the collision stage (0 for kinematic
+    /// vertices).
     pub inv_mass: Vec<f64>,
     /// The integrator's report of the last solve (its buffers reused across steps).
     pub report: StepReport,
-    /// The vertices near a moving obstacle, for fast contact's test (see `fast::outruns`).
+    /// Scratch: the vertices near a moving obstacle, for fast contact's test (see
+    /// `fast::outruns`).
     pub near: Vec<(usize, f64, f64)>,
 }

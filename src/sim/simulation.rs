@@ -25,7 +25,7 @@ pub struct Simulation {
     pub(super) obstacle_targets: Vec<Option<(Pose, Pose)>>,
     /// Obstacles (their poses evolve) and the stage's buffers; `None` without collisions.
     pub(super) collision: Option<CollisionStage>,
-    /// The guard's bookkeeping (energy budget, recent energies).
+    /// The guard's state (energy bookkeeping, strain check, what it learned of the substep).
     pub(super) guard: Guard,
     /// Constraints, holds and lagged forces between solver and collision stage.
     pub(super) coupling: Coupling,
@@ -35,7 +35,7 @@ pub struct Simulation {
     pub(super) model: Model,
     /// The time integrator (with its own warm-start state and buffers inside).
     pub(super) integrator: Box<dyn Integrator>,
-    // Work: scratch.
+    // Work: the substep's start state, the guard's saves, caches and scratch.
     pub(super) work: Work,
 }
 
@@ -104,8 +104,10 @@ impl Simulation {
         self.integrator.prepare(&effects, cloth.len());
         self.coupling.replace_cloth(cloth.len());
         self.cloth = cloth;
-        // A new model: its cached frequency bound and strain limit were for the old cloth.
+        // A new model (frequency bound, strain limit) and work (the tethers' cache) for the new
+        // cloth.
         self.model = Model::new(effects, self.model.caps, &self.cloth);
+        self.work.tethers = Default::default();
         self.guard.restart();
         Ok(())
     }

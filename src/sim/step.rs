@@ -1,22 +1,26 @@
 //! `Simulation::step`: the order of one frame step, as a table of contents.
 //!
-//! One frame of `dt` is `substeps` substeps of `h = dt / substeps`. Each substep runs one way
-//! (each stage below is one named call, with its inputs and outputs in its doc):
-//! 0. a moving obstacle that would outrun the cloth near it splits the substep in two (see
-//!    [`super::fast`]);
+//! One frame of `dt` is `substeps` substeps of `h = dt / substeps`, each a [`Span`]. A substep
+//! runs these stages in this order (each one named call in [`Simulation::attempt`]); the guard
+//! answers its checks with a verdict that goes on, or splits the substep in two, or stops:
+//! 0. the guard splits up front a substep over the integrator's stability limit, or one in
+//!    which a moving obstacle would outrun the cloth near it (see [`super::fast`]);
 //! 1. kinematic vertices get their end-of-substep targets (frames interpolated across the frame);
 //! 2. coupling in: the last collision pass's contacts become the solver's constraints;
-//! 3. effects give forces and the integrator advances the state (the start state is kept);
+//! 3. the guard books the start (energies, forces from outside); effects give forces and the
+//!    integrator advances the state (the start state is kept); the work moving contacts did
+//!    inside the solve goes to the guard;
 //! 4. kinematic vertices are put exactly on their end-of-substep targets;
-//! 5. the guard checks the result (and subdivides or stops per policy); then edges the solve
-//!    left beyond their material's strain limit are shortened (see [`super::limit`]);
-//! 6. obstacles move over the substep;
+//! 5. the guard checks the solved state (finite, speeds, energy: a rejected substep is rolled
+//!    back, then split or stopped per policy); edges the solve left beyond their material's
+//!    strain limit are shortened (see [`super::limit`]);
+//! 6. the guard saves what a rollback after the collision pass needs, where its strain check
+//!    applies; obstacles move over the substep;
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
 //! 8. collisions fix the new state; metrics are recorded;
-//! 9. the guard checks the state the substep ends in for edges the collision response stretched
-//!    beyond the strain bound (and rolls the whole substep back per policy), and for vertices
-//!    the obstacle response moved more than fast contact allows (then the substep is rolled back
-//!    and split as in 0; see [`super::fast`]).
+//! 9. the guard checks the state the substep ends in: an edge the collision response stretched
+//!    beyond the strain bound, or a vertex it moved more than fast contact allows, rolls the
+//!    whole substep back to be split (see [`super::guard`]).
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a
@@ -30,35 +34,33 @@
 
 use super::coupling::StartState;
 use super::energy::Energies;
-use super::error::{DivergenceError, Symptom};
-use super::fast;
-use super::guard::{self, Book, DivergencePolicy, Sample};
+use super::error::{divergence_error, DivergenceError};
+use super::guard::{self, Failure, Redo, Verdict};
 use super::metrics::StepMetrics;
 use super::simulation::Simulation;
+use super::span::Span;
 use crate::integrate::Dynamics;
-use crate::Vec3;
 use std::time::Instant;
 
 impl Simulation {
-    /// Switches the fast-contact splitting and the guard's strain check off or back on (on by
-    /// default): what they cost is measured against this (`benches/fast_links.rs`).
+    /// Switches fast-contact splitting and the guard's checks after the collision pass off or
+    /// back on (on by default): what they cost is measured against this
+    /// (`benches/fast_links.rs`).
     pub fn set_fast_contact(&mut self, on: bool) {
-        self.guard.fast_off = !on;
+        self.guard.set_contact_checks(on);
     }
 
-    /// Advances one frame (`settings.dt`).
-    pub fn step(&mut self) -> Result<&StepMetrics, Box<DivergenceError>> {
+    /// Advances one frame (`settings.dt`) and says what it did.
+    pub fn step(&mut self) -> Result<StepMetrics, Box<DivergenceError>> {
         let wall = Instant::now();
         let mut m = StepMetrics::default();
         let n_sub = self.settings.substeps.max(1);
-        let h = self.settings.dt / n_sub as f64;
+        let h = self.settings.dt / f64::from(n_sub);
         let t0 = self.time;
         self.guard.start_frame();
         self.frames.script_targets(t0 + self.settings.dt);
         for k in 0..n_sub {
-            let s0 = k as f64 / n_sub as f64;
-            let s1 = (k + 1) as f64 / n_sub as f64;
-            self.substep(t0 + k as f64 * h, h, s0, s1, 0, &mut m)?;
+            self.substep(Span::of_frame(t0, h, k, n_sub), &mut m)?;
         }
         self.frames.finish_step();
         for t in self.obstacle_targets.iter_mut() {
@@ -80,214 +82,83 @@ impl Simulation {
         };
         m.max_speed = speed2.sqrt();
         m.wall_time_s = wall.elapsed().as_secs_f64();
-        self.last = m;
-        Ok(&self.last)
+        self.last = m.clone();
+        Ok(m)
     }
 
-    /// One substep from fraction `s0` to `s1` of the frame, redone as halves on divergence, or
-    /// split up front where an obstacle outruns cloth within its reach.
-    fn substep(
-        &mut self,
-        t: f64,
-        h: f64,
-        s0: f64,
-        s1: f64,
-        depth: u32,
-        m: &mut StepMetrics,
-    ) -> Result<(), Box<DivergenceError>> {
-        if self.over_stability_limit(h, depth) {
-            // Known to be unstable before trying: an explicit step over its limit is only caught
-            // by the energy check once the unstable mode carries a visible share of the energy,
-            // and that energy would stay in the cloth. Halve it up front instead.
-            m.subdivisions += 1;
-            return self.halves(t, h, (s0, s1), depth, m);
+    /// One substep over `span`, redone as two halves where the guard's verdict says so.
+    fn substep(&mut self, span: Span, m: &mut StepMetrics) -> Result<(), Box<DivergenceError>> {
+        match self.attempt(span, m) {
+            Ok(()) => {
+                m.substeps += 1;
+                Ok(())
+            }
+            Err(Redo::Split(why)) => {
+                m.count_split(why);
+                let [first, second] = span.halves();
+                self.substep(first, m)?;
+                self.substep(second, m)
+            }
+            Err(Redo::Fail(failure)) => Err(Box::new(self.divergence_error(span, failure))),
         }
-        let obstacle_speed = match self.fast_contact(t, h, (s0, s1), depth) {
-            Err(()) => {
-                m.contact_splits += 1;
-                return self.halves(t, h, (s0, s1), depth, m);
-            }
-            Ok((speed, refused)) => {
-                m.contact_splits_refused += u32::from(refused);
-                speed
-            }
-        };
-        let book = self.guard.book();
-        self.kinematic_targets(h, s0, s1);
-        self.coupling_in(t, h, (s0, s1));
-        let e0 = self.guard.start_energies(&self.cloth, &self.model.effects);
-        let external = self.external_forces(t);
-        self.integrate(t, h, m);
-        self.snap_kinematic(s1);
-        let external = self.moving_contact_work(external, h);
-        if let Err(failure) = self.check(t, h, e0, external) {
-            self.roll_back(e0);
-            return self.rejected(t, h, (s0, s1), depth, m, failure);
-        }
-        self.limit_strain(h, m);
-        let strained = self.guard_strain();
-        if self.collision.is_some() {
-            if strained {
-                self.save_stage();
-            }
-            self.move_obstacles(t, h, s1);
-            self.coupling_out(t, h);
-            self.collide(h, m);
-        }
-        if strained {
-            if let Err(failure) = self.check_strain(obstacle_speed) {
-                // Subdivide: halved while the guard may; at its deepest level the response cannot
-                // do better and the state is kept (its stretch is on /diagnostics). Stop: stop.
-                let g = self.settings.guard;
-                if g.policy == DivergencePolicy::Stop || depth < g.max_subdivisions {
-                    self.roll_back_collided(book);
-                    return self.rejected(t, h, (s0, s1), depth, m, failure);
-                }
-            }
-            if self.response_jumped() {
-                if depth < self.split_levels() {
-                    self.roll_back_collided(book);
-                    m.contact_splits += 1;
-                    return self.halves(t, h, (s0, s1), depth, m);
-                }
-                m.contact_splits_refused += 1;
-            }
-        }
-        m.substeps += 1;
-        Ok(())
     }
 
-    /// A rejected substep (already rolled back): redone as halves when the policy allows, else
-    /// the error.
-    fn rejected(
-        &mut self,
-        t: f64,
-        h: f64,
-        (s0, s1): (f64, f64),
-        depth: u32,
-        m: &mut StepMetrics,
-        (vertex, symptom): (usize, Symptom),
-    ) -> Result<(), Box<DivergenceError>> {
-        let g = self.settings.guard;
-        if g.policy == DivergencePolicy::Subdivide && depth < g.max_subdivisions {
-            m.subdivisions += 1;
-            return self.halves(t, h, (s0, s1), depth, m);
-        }
-        Err(Box::new(self.divergence_error(t, h, vertex, symptom)))
+    /// The stages of one substep over `span`, in the module doc's order; a check the guard
+    /// does not pass ends it, with the state back at the substep's start.
+    fn attempt(&mut self, span: Span, m: &mut StepMetrics) -> Verdict {
+        self.split_up_front(span, m)?; // 0
+        self.kinematic_targets(span); // 1
+        self.coupling_in(span); // 2
+        let e0 = self.start(span); // 3
+        self.integrate(span, m);
+        self.snap_kinematic(span); // 4
+        self.check_solve(span, e0)?; // 5
+        self.limit_strain(span, m);
+        self.watch_response(); // 6
+        self.move_obstacles(span);
+        self.coupling_out(span); // 7
+        self.collide(span, m); // 8
+        self.check_response(span, m) // 9
     }
 
-    /// The substep `(t, h)` over frame fractions `s0..s1` as two halves, one level deeper.
-    fn halves(
-        &mut self,
-        t: f64,
-        h: f64,
-        (s0, s1): (f64, f64),
-        depth: u32,
-        m: &mut StepMetrics,
-    ) -> Result<(), Box<DivergenceError>> {
-        let sm = 0.5 * (s0 + s1);
-        self.substep(t, 0.5 * h, s0, sm, depth + 1, m)?;
-        self.substep(t + 0.5 * h, 0.5 * h, sm, s1, depth + 1, m)
-    }
-
-    /// Stage 0: whether a moving obstacle outruns cloth within its reach over this substep (see
-    /// [`fast`]): `Err` asks for a split (within the guard's levels of halving and of fast
-    /// contact), `Ok` gives the fastest obstacle point's speed (m/s) for the strain bound, and
-    /// whether a split was wanted that `max_contact_split_levels` refused. Static obstacles
-    /// cost nothing.
-    fn fast_contact(
-        &mut self,
-        t: f64,
-        h: f64,
-        (s0, s1): (f64, f64),
-        depth: u32,
-    ) -> Result<(f64, bool), ()> {
-        let Some(stage) = self.collision.as_ref().filter(|_| !self.guard.fast_off) else {
-            return Ok((0.0, false));
-        };
-        let may_split = depth < self.split_levels();
-        // At the budget's depth (not the guard's) the test still runs, to count the refusal.
-        let test = may_split || depth < self.settings.guard.max_subdivisions;
-        let (cloth, targets) = (&self.cloth, &self.obstacle_targets);
-        let near = &mut self.work.near;
-        let (mut top, mut refused) = (0.0f64, false);
-        let mut thickness = None;
-        for (k, o) in stage.obstacles().iter().enumerate() {
-            let target = targets.get(k).and_then(Option::as_ref);
-            let poses = fast::substep_poses(o, target, (t, h), (s0, s1));
-            if poses.0 == poses.1 {
-                continue;
-            }
-            top = top.max(fast::top_speed(o, poses, h));
-            if !test || refused {
-                continue;
-            }
-            let strain = self.guard.strain_model(cloth, &self.model.effects);
-            let reach = fast::Reach {
-                thickness: *thickness
-                    .get_or_insert_with(|| cloth.thickness.iter().copied().fold(0.0, f64::max)),
-                spacing: strain.max_spacing(),
-            };
-            if fast::outruns(o, poses, cloth, h, reach, |i| strain.spacing(i), near) {
-                if !may_split {
-                    refused = true;
-                    continue;
-                }
-                return Err(());
-            }
-        }
-        Ok((top, refused))
-    }
-
-    /// How many levels of halving fast contact may split a scene substep into: the guard's, or
-    /// fewer when `max_contact_split_levels` bounds what a live node spends on it.
-    fn split_levels(&self) -> u32 {
-        let g = self.settings.guard;
-        g.max_contact_split_levels
-            .map_or(g.max_subdivisions, |l| l.min(g.max_subdivisions))
-    }
-
-    /// Stage 9, after the strain check: whether the collision pass moved a vertex it answered
-    /// for an obstacle by more than a third of its spacing from where the solve left it (see
-    /// [`fast::jumped`]); such a substep is rolled back and split like one fast contact predicts.
-    /// Only where the strain check applies (it keeps the solved positions), and not while the
-    /// cloth is still leaving an obstacle the scene started it in (the lead-out moves a vertex a
-    /// sixth of its shortest edge per pass at most; the strain check waits too).
-    fn response_jumped(&self) -> bool {
-        let (Some(stage), Some(strain)) = (self.collision.as_ref(), self.guard.strain.as_ref())
-        else {
-            return false;
-        };
-        if self.guard.inside != Some(false) {
-            return false;
-        }
-        fast::jumped(
-            &self.guard.x_solved,
-            &self.cloth.x,
-            |i| strain.spacing(i),
-            |i| stage.contact_kind(i, false).is_some(),
+    /// The error for a substep that failed.
+    fn divergence_error(&self, span: Span, f: Failure) -> DivergenceError {
+        divergence_error(
+            (&self.cloth, &self.model.effects),
+            self.integrator.name(),
+            (self.model.caps.stability_limit, self.model.omega_bound),
+            (span.t, span.h),
+            f.vertex,
+            f.symptom,
         )
     }
 
-    /// Whether the substep is over the integrator's stability limit (see
-    /// [`guard::over_stability_limit`]).
-    fn over_stability_limit(&mut self, h: f64, depth: u32) -> bool {
-        let limit = self.model.caps.stability_limit;
-        let (model, mass) = (&mut self.model, &self.cloth.mass);
-        guard::over_stability_limit(&self.settings.guard, limit, h, depth, || {
-            model.omega_bound(mass)
-        })
+    /// Stage 0: the guard's split before trying (see [`guard::Guard::split_up_front`]).
+    fn split_up_front(&mut self, span: Span, m: &mut StepMetrics) -> Verdict {
+        self.guard.split_up_front(
+            &self.settings.guard,
+            span,
+            self.model.stability(),
+            self.collision.as_ref(),
+            &self.obstacle_targets,
+            (&self.cloth, &self.model.effects),
+            &mut self.work.near,
+            m,
+        )
     }
 
     /// Stage 1: Kinematic vertices start on their target at `s0` and move at the constant velocity
     /// that reaches the one at `s1`; the solver's filter fixes them at that velocity.
-    fn kinematic_targets(&mut self, h: f64, s0: f64, s1: f64) {
+    fn kinematic_targets(&mut self, span: Span) {
         self.coupling.begin(self.cloth.len());
         for (i, k) in &self.cloth.kinematic {
-            let (a, b) = (self.frames.target(k, s0), self.frames.target(k, s1));
+            let (a, b) = (
+                self.frames.target(k, span.s0),
+                self.frames.target(k, span.s1),
+            );
             let i = *i as usize;
             self.cloth.x[i] = a;
-            self.cloth.v[i] = (b - a) / h;
+            self.cloth.v[i] = (b - a) / span.h;
             self.coupling.fix(i, self.cloth.v[i]);
         }
     }
@@ -295,13 +166,12 @@ impl Simulation {
     /// Stage 2: Coupling in: the last collision pass's contacts become this substep's constraints
     /// (filter, friction, edge springs; the edges of obstacles moving in this substep aimed at
     /// where they will be at its end); see [`super::coupling`].
-    fn coupling_in(&mut self, t: f64, h: f64, (s0, s1): (f64, f64)) {
+    fn coupling_in(&mut self, span: Span) {
         if let Some(stage) = self.collision.as_mut() {
             let targets = &self.obstacle_targets;
             let ends: Vec<Option<crate::Pose>> = (stage.obstacles().iter().enumerate())
                 .map(|(k, o)| {
-                    let target = targets.get(k).and_then(Option::as_ref);
-                    let (a, b) = fast::substep_poses(o, target, (t, h), (s0, s1));
+                    let (a, b) = span.poses(o, targets.get(k).and_then(Option::as_ref));
                     (a != b).then_some(b)
                 })
                 .collect();
@@ -312,9 +182,9 @@ impl Simulation {
         let start = StartState {
             cloth: &self.cloth,
             effects: &self.model.effects,
-            t,
+            t: span.t,
             h_scene: self.settings.substep(),
-            h,
+            h: span.h,
         };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
@@ -322,69 +192,27 @@ impl Simulation {
         self.coupling.contacts_in(stage, &start, caps, scratch);
     }
 
-    /// The forces from outside the cloth at the start of the substep, for the guard (into
-    /// `work.fext`); false when there are none.
-    fn external_forces(&mut self, t: f64) -> bool {
-        let (fext, scratch) = (&mut self.work.fext, &mut self.work.scratch_f);
-        guard::external_forces(&self.cloth, &self.model.effects, t, fext, scratch)
+    /// Stage 3, first: the guard books the substep's start; its energies are returned.
+    fn start(&mut self, span: Span) -> Energies {
+        let w = &mut self.work;
+        let cloth = (&self.cloth, &self.model.effects);
+        (self.guard).start(
+            &mut w.saved,
+            cloth,
+            span.t,
+            &mut w.outside,
+            &mut w.scratch_f,
+        )
     }
 
-    /// Moving obstacles do work on the cloth inside the solve: through the springs on their
-    /// features (a link carrying the cloth), through the filter holding a vertex at a moving
-    /// surface's velocity (a ball pushing it) and through that surface's friction (a forearm
-    /// dragging a hem). All are work from outside: the springs' end forces, the held vertices'
-    /// constraint impulses over `h` and the friction drags' end forces join `work.fext` (zeroed
-    /// first when `external` says it holds nothing). Returns whether `work.fext` now holds external
-    /// forces. Nothing is added where nothing moves (bit for bit what the guard did before).
-    fn moving_contact_work(&mut self, external: bool, h: f64) -> bool {
-        let c = &self.coupling.constraints;
-        let springs = &self.coupling.moving_springs;
-        let report = &self.work.report;
-        let impulses = report.impulses();
-        let held_moving = |i: usize| {
-            !matches!(
-                c.filter[i],
-                crate::linalg::Filter::Free | crate::linalg::Filter::Fixed
-            ) && c.target_velocity[i] != Vec3::ZERO
-        };
+    /// Stage 3: Integrate: the start state moves to the work's start buffers (a swap, not a copy)
+    /// and the integrator writes the end state into the cloth's buffers; its contact forces go to
+    /// the coupling, its counts to the metrics, the work moving contacts did in it to the guard's
+    /// outside forces.
+    fn integrate(&mut self, span: Span, m: &mut StepMetrics) {
         let n = self.cloth.len();
-        let any_held = impulses.is_some() && (0..n).any(held_moving);
-        let rubbed = &report.moving_friction;
-        if !any_held
-            && rubbed.is_empty()
-            && (springs.is_empty() || !self.model.caps.solves_contacts)
-        {
-            return external;
-        }
-        let fext = &mut self.work.fext;
-        if !external {
-            crate::linalg::scratch(fext, n);
-        }
-        if self.model.caps.solves_contacts {
-            for &k in springs {
-                if let (Some(spring), Some(f)) = (c.contacts.get(k), report.contact_forces.get(k)) {
-                    spring.add_point_force(spring.normal * *f, 1.0, fext);
-                }
-            }
-        }
-        if let Some(r) = impulses.filter(|_| any_held) {
-            for i in (0..n).filter(|&i| held_moving(i)) {
-                fext[i] += r[i] / h;
-            }
-        }
-        for &(i, f) in rubbed.iter().filter(|r| (r.0 as usize) < n) {
-            fext[i as usize] += f;
-        }
-        true
-    }
-
-    /// Stage 3: Integrate: the start state moves to the save buffers (a swap, not a copy) and the
-    /// integrator writes the end state into the cloth's buffers; its contact forces go to the
-    /// coupling, its counts to the metrics.
-    fn integrate(&mut self, t: f64, h: f64, m: &mut StepMetrics) {
-        let n = self.cloth.len();
-        std::mem::swap(&mut self.work.x_save, &mut self.cloth.x);
-        std::mem::swap(&mut self.work.v_save, &mut self.cloth.v);
+        std::mem::swap(&mut self.work.x_start, &mut self.cloth.x);
+        std::mem::swap(&mut self.work.v_start, &mut self.cloth.v);
         crate::linalg::scratch(&mut self.cloth.x, n);
         crate::linalg::scratch(&mut self.cloth.v, n);
         let d = Dynamics {
@@ -394,111 +222,103 @@ impl Simulation {
             nominal_step: self.settings.substep(),
         };
         let w = &mut self.work;
-        let start = (w.x_save.as_slice(), w.v_save.as_slice());
+        let start = (w.x_start.as_slice(), w.v_start.as_slice());
         let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
-        self.integrator
-            .step_into(&d, t, h, start, x, v, &mut w.report);
+        (self.integrator).step_into(&d, span.t, span.h, start, x, v, &mut w.report);
+        let solves_contacts = self.model.caps.solves_contacts;
         let forces = w.report.contact_forces.as_slice();
-        self.coupling
-            .solved(self.model.caps.solves_contacts.then_some(forces));
+        self.coupling.solved(solves_contacts.then_some(forces));
         m.add_solve(&w.report);
+        let c = &self.coupling;
+        guard::moving_contact_work(
+            &c.constraints,
+            &c.moving_springs,
+            &w.report,
+            solves_contacts,
+            (n, span.h),
+            &mut w.outside,
+        );
     }
 
     /// Stage 4: Kinematic vertices end exactly on target (no drift from round-off).
-    fn snap_kinematic(&mut self, s1: f64) {
+    fn snap_kinematic(&mut self, span: Span) {
         for (i, k) in &self.cloth.kinematic {
-            self.cloth.x[*i as usize] = self.frames.target(k, s1);
+            self.cloth.x[*i as usize] = self.frames.target(k, span.s1);
         }
     }
 
-    /// Stage 5: The guard's verdict on the solved substep started at energies `e0`; an accepted one
-    /// is booked. `external`: whether `work.fext` holds external forces.
-    fn check(
-        &mut self,
-        t: f64,
-        h: f64,
-        e0: Energies,
-        external: bool,
-    ) -> Result<(), (usize, Symptom)> {
-        let g = self.settings.guard;
+    /// Stage 5: The guard's verdict on the solved substep started at energies `e0` (see
+    /// [`guard::Guard::check_solve`]).
+    fn check_solve(&mut self, span: Span, e0: Energies) -> Verdict {
         let w = &mut self.work;
-        let s = Sample {
-            cloth: &self.cloth,
-            effects: &self.model.effects,
-            x0: &w.x_save,
-            v0: &w.v_save,
-        };
-        let mut verdict = self
-            .guard
-            .check(&g, &s, h, e0, external.then_some(w.fext.as_slice()));
-        if external
-            && self.model.caps.stability_limit.is_none()
-            && matches!(verdict, Err((_, Symptom::EnergyGain { .. })))
-        {
-            let scratch = &mut w.scratch_f;
-            verdict = self
-                .guard
-                .check_with_end_forces(&g, &s, t + h, h, e0, &w.fext, scratch);
-        }
-        let accepted = verdict?;
-        self.guard.accept(e0, accepted);
-        Ok(())
-    }
-
-    /// The substep failed: the start state comes back from the save buffers.
-    fn roll_back(&mut self, e0: Energies) {
-        std::mem::swap(&mut self.cloth.x, &mut self.work.x_save);
-        std::mem::swap(&mut self.cloth.v, &mut self.work.v_save);
-        self.guard.reject(e0);
-    }
-
-    /// The error for the failed substep, with the cause only where the stability bound says so.
-    fn divergence_error(
-        &mut self,
-        t: f64,
-        h: f64,
-        vertex: usize,
-        symptom: Symptom,
-    ) -> DivergenceError {
-        let omega = self.model.omega_bound(&self.cloth.mass);
-        guard::divergence_error(
-            &self.cloth,
-            &self.model.effects,
-            self.integrator.name(),
-            self.model.caps.stability_limit,
-            omega,
-            (t, h),
-            vertex,
-            symptom,
+        self.guard.check_solve(
+            &self.settings.guard,
+            span,
+            (&mut self.cloth, &self.model.effects),
+            (&mut w.x_start, &mut w.v_start),
+            e0,
+            self.model.caps.stability_limit.is_some(),
+            &w.outside,
+            &mut w.scratch_f,
         )
     }
 
-    /// Stage 6: Obstacles move over `[t, t + h]`: scripted ones by their motion, driven ones to
+    /// Stage 5, after the guard's check: edges the solve left longer than their material's
+    /// strain limit are shortened (see [`super::limit`]). Nothing when no material sets a limit.
+    fn limit_strain(&mut self, span: Span, m: &mut StepMetrics) {
+        let Some(limit) = self.model.limit.as_ref() else {
+            return;
+        };
+        let w = &mut self.work;
+        self.cloth.inverse_masses_into(&mut w.inv_mass);
+        let c = &mut self.cloth;
+        let r = limit.apply(
+            &mut w.tethers,
+            &mut c.x,
+            &mut c.v,
+            &w.inv_mass,
+            &c.kinematic,
+            span.h,
+        );
+        m.add_limit(&r);
+    }
+
+    /// Stage 6, first: the guard decides whether it checks the collision pass's answer and saves
+    /// what a rollback after it needs (see [`guard::Guard::watch_response`]).
+    fn watch_response(&mut self) {
+        let cloth = (&self.cloth, &self.model.effects);
+        (self.guard).watch_response(self.collision.as_ref(), cloth, &mut self.work.saved);
+    }
+
+    /// Stage 6: Obstacles move over the span: scripted ones by their motion, driven ones to
     /// fraction `s1` of their frame targets.
-    fn move_obstacles(&mut self, t: f64, h: f64, s1: f64) {
+    fn move_obstacles(&mut self, span: Span) {
         let Some(stage) = self.collision.as_mut() else {
             return;
         };
-        stage.advance_obstacles(t, t + h);
+        stage.advance_obstacles(span.t, span.t + span.h);
         for (idx, target) in self.obstacle_targets.iter().enumerate() {
             if let Some((a, b)) = target {
-                stage.set_obstacle_pose(idx, a.lerp(b, s1));
+                stage.set_obstacle_pose(idx, a.lerp(b, span.s1));
             }
         }
     }
 
     /// Stage 7: Coupling out: the solver's impulses on held vertices become the stage's feedback
-    /// (and in-solve friction's next limits); see [`super::coupling`].
-    fn coupling_out(&mut self, t: f64, h: f64) {
+    /// (and in-solve friction's next limits); see [`super::coupling`]. Nothing without a stage.
+    fn coupling_out(&mut self, span: Span) {
+        if self.collision.is_none() {
+            return;
+        }
         let solves_friction = self.model.caps.solves_friction;
         let impulses = self.work.report.impulses();
-        let (v0, scratch) = (&self.work.v_save, &mut self.work.scratch_f);
+        let (v0, scratch) = (&self.work.v_start, &mut self.work.scratch_f);
         let (cloth, effects) = (&self.cloth, &self.model.effects);
         self.coupling.feedback_out(
             cloth,
             effects,
             v0,
-            (t, h),
+            (span.t, span.h),
             solves_friction,
             impulses,
             scratch,
@@ -507,7 +327,7 @@ impl Simulation {
 
     /// Stage 8: Collisions fix the end state (kinematic vertices have infinite mass), with the
     /// solver's feedback; the report goes to the metrics and the energy change to the guard.
-    fn collide(&mut self, h: f64, m: &mut StepMetrics) {
+    fn collide(&mut self, span: Span, m: &mut StepMetrics) {
         let Some(stage) = self.collision.as_mut() else {
             return;
         };
@@ -515,111 +335,24 @@ impl Simulation {
         self.cloth.inverse_masses_into(inv_mass);
         let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
         let feedback = &self.coupling.feedback;
-        let r = stage.resolve(&self.work.x_save, x, v, inv_mass, h, feedback);
+        let r = stage.resolve(&self.work.x_start, x, v, inv_mass, span.h, feedback);
         m.add_collision(&r);
         self.guard
             .collided(Energies::of(&self.cloth, &self.model.effects));
     }
 
-    /// Stage 5, after the guard's check: edges the solve left longer than their material's
-    /// strain limit are shortened (see [`super::limit`]). Nothing when no material sets a limit.
-    fn limit_strain(&mut self, h: f64, m: &mut StepMetrics) {
-        let Some(limit) = self.model.limit.as_mut() else {
-            return;
-        };
-        let w = &mut self.work.inv_mass;
-        self.cloth.inverse_masses_into(w);
-        let c = &mut self.cloth;
-        let r = limit.apply(&mut c.x, &mut c.v, w, &c.kinematic, h);
-        m.add_limit(&r);
-    }
-
-    /// Whether the guard's strain check applies to this cloth (one with a collision stage; see
-    /// [`super::strain`]).
-    fn guard_strain(&mut self) -> bool {
-        !self.guard.fast_off
-            && self.collision.is_some()
-            && (self.guard)
-                .strain_model(&self.cloth, &self.model.effects)
-                .applies()
-    }
-
-    /// Before the collision pass, for a rejection after it: the stage's part of the start state
-    /// and the solved positions.
-    fn save_stage(&mut self) {
-        if let Some(stage) = &self.collision {
-            stage.save_into(&mut self.guard.stage_save);
-        }
-        self.guard.x_solved.clone_from(&self.cloth.x);
-    }
-
-    /// Stage 9: the guard's strain check of the state the substep ends in: an edge the collision
-    /// pass stretched beyond the bound of the material and the fastest impact of the run so far
-    /// (this substep's: the fastest start speed of the cloth plus `obstacle_speed`), from within
-    /// it after the solve (see [`super::strain`]). An edge the solve itself left beyond the bound
-    /// is the scene's doing (a kinematic link dragging pinned cloth stretches it without limit)
-    /// and the energy check's business; so is cloth the scene started inside an obstacle, until
-    /// it is out.
-    fn check_strain(&mut self, obstacle_speed: f64) -> Result<(), (usize, Symptom)> {
-        let v_cloth = (self.work.v_save.iter())
-            .map(|v| v.length_squared())
-            .fold(0.0, f64::max)
-            .sqrt();
-        let speed = self.guard.book().peak_speed.max(v_cloth + obstacle_speed);
-        self.guard.set_peak_speed(speed);
-        let Some(stage) = self.collision.as_ref() else {
-            return Ok(());
-        };
-        let x_start = &self.work.x_save;
-        if *(self.guard.inside).get_or_insert_with(|| !stage.overlaps(x_start).is_empty()) {
-            if !stage.overlaps(&self.cloth.x).is_empty() {
-                return Ok(());
-            }
-            self.guard.inside = Some(false);
-        }
-        let Some(strain) = self.guard.strain.as_ref() else {
-            return Ok(());
-        };
-        let bound = strain.bound(speed);
-        let solved = &self.guard.x_solved;
-        // Only edges an obstacle's pass moved an end of: halving bounds how far an obstacle
-        // moves per substep, not how far self-contact pushes a layer squeezed against kinematic
-        // cloth (at most its contact distance). robot_cape's former torso and shoulder
-        // attachments: self-contact pushed an edge the solve left at 1.32 to 1.35 (bound 1.34),
-        // eight levels of halving could not undo it, and the solve answered the same stretch over
-        // ever shorter substeps with speeds growing as 1 / h (0.15 to 5.4 m/s in one 0.5 ms
-        // substep, 16 m/s by t = 1.8 s; 1.6 m/s without the halving).
-        let by_obstacle = |i: usize| stage.contact_kind(i, false).is_some();
-        let judged = |a: usize, b: usize| by_obstacle(a) || by_obstacle(b);
-        let Some(worst) = strain.grown_beyond(solved, &self.cloth.x, bound, judged) else {
-            return Ok(());
-        };
-        let (a, b) = worst.vertices;
-        let moved = |i: usize| solved[i] != self.cloth.x[i];
-        let contact = (stage.contact_kind(a, moved(a))).or_else(|| stage.contact_kind(b, moved(b)));
-        let other = match self.cloth.piece_of(b) {
-            Some(p) => b - p.first_vertex,
-            None => b,
-        };
-        Err((
-            a,
-            Symptom::Stretch {
-                other,
-                ratio: worst.ratio,
-                bound,
-                contact,
-            },
-        ))
-    }
-
-    /// A substep rejected after its collision pass: the cloth, the guard's bookkeeping (`book`,
-    /// as the substep started) and the stage's poses and contacts go back to its start.
-    fn roll_back_collided(&mut self, book: Book) {
-        std::mem::swap(&mut self.cloth.x, &mut self.work.x_save);
-        std::mem::swap(&mut self.cloth.v, &mut self.work.v_save);
-        self.guard.set_book(book);
-        if let Some(stage) = self.collision.as_mut() {
-            stage.restore(&self.guard.stage_save);
-        }
+    /// Stage 9: the guard's verdict on the state the substep ends in (see
+    /// [`guard::Guard::check_response`]).
+    fn check_response(&mut self, span: Span, m: &mut StepMetrics) -> Verdict {
+        let w = &mut self.work;
+        self.guard.check_response(
+            &self.settings.guard,
+            span,
+            self.collision.as_mut(),
+            &mut self.cloth,
+            (&mut w.x_start, &mut w.v_start),
+            &w.saved,
+            m,
+        )
     }
 }

@@ -249,7 +249,7 @@ pub fn run(scene: &Scene, seconds: f64) -> Judged {
             let t = sim.time() + sim.settings.dt;
             d.advance(&mut sim, t);
         }
-        match sim.step().cloned() {
+        match sim.step() {
             Ok(m) => {
                 if trace {
                     let (s, e) = max_stretch(&sim.cloth.x, &edges);
