@@ -1,4 +1,4 @@
-//! Issue 16's benchmark: scene S1 (a 1 m cloth dropped flat onto a fixed sphere, 2 s,
+//! The contact benchmark: scene S1 (a 1 m cloth dropped flat onto a fixed sphere, 2 s,
 //! `benches/scenes/bench_s1.yaml`) and S2 (the same cloth hanging from two corners, no contact,
 //! `benches/scenes/bench_s2.yaml`) at 32x32, 64x64 and 128x128, each run once as a whole
 //! simulation.
@@ -12,12 +12,12 @@
 //! (assembly, the multigrid's setup and updates, the Newton checks, the guard).
 //! `DRAPE_BENCH_RES=64` (comma separated) picks resolutions, `DRAPE_BENCH_SCENES=s1` scenes,
 //! `DRAPE_BENCH_STRAIN_LIMIT=0.01` adds `material.strain_limit` and
-//! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the issue's material);
+//! `DRAPE_BENCH_FRICTION=5` sets the cloth's friction (neither is the scene's material);
 //! `DRAPE_BENCH_LINEARISATION=0.2` sets `solver.linearisation_tolerance` (Newton iterations while
 //! a spring stretches more than that beyond its linearised prediction; 1e9: the energy check
-//! alone); `DRAPE_BENCH_SUBSTEPS=4` sets `solver.substeps` (the issue's is 1: what the step size
+//! alone); `DRAPE_BENCH_SUBSTEPS=4` sets `solver.substeps` (the scene's is 1: what the step size
 //! contributes to the stretch). It uses only `Simulation`'s public metrics, so the same file
-//! runs on an older checkout for a ratio in one session.
+//! runs on an older checkout, for a ratio between two builds on one machine.
 
 use drape::cloth::topology::{springs, SpringKind};
 use drape::scene::Scene;
@@ -66,7 +66,7 @@ fn load(file: &str, res: usize) -> Simulation {
         .join(file);
     let mut s = Scene::load(&path).expect("bundled bench scene");
     s.cloths[0].grid.resolution = [res, res];
-    // Not the issue's material: a strain limit added on request, to see what it buys.
+    // Not the scene's material: a strain limit added on request, to see what it buys.
     s.cloths[0].material.strain_limit = std::env::var("DRAPE_BENCH_STRAIN_LIMIT")
         .ok()
         .and_then(|l| l.parse().ok());
@@ -82,7 +82,7 @@ fn load(file: &str, res: usize) -> Simulation {
     {
         s.solver.linearisation_tolerance = t;
     }
-    // Not the issue's settings either: substeps per 1/60 s frame, to see what the step size
+    // Not the scene's settings either: substeps per 1/60 s frame, to see what the step size
     // contributes to the landing's stretch.
     if let Some(n) = std::env::var("DRAPE_BENCH_SUBSTEPS")
         .ok()

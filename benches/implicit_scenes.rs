@@ -4,8 +4,8 @@
 //!
 //! `cargo bench --bench implicit_scenes` prints, before criterion's timings, the CG iterations
 //! and Newton force evaluations per frame over a fixed run, so that time and work can be compared,
-//! and the cost of one PCG iteration at 64x64 (issue 16, item 2) on S1 (`benches/scenes/bench_s1.yaml`,
-//! the cloth on a sphere) and S2 (`bench_s2.yaml`, hanging): the solver's own count of flops and
+//! and the cost of one PCG iteration at 64x64 on S1 (`benches/scenes/bench_s1.yaml`, the cloth
+//! on a sphere) and S2 (`bench_s2.yaml`, hanging): the solver's own count of flops and
 //! least bytes streamed per iteration (block CSR 3x3 product, V-cycle levels, vector passes), the
 //! measured wall time per iteration, this machine's memory bandwidth (a STREAM triad over
 //! buffers far larger than cache, both cores) and the ratio of the time to the bandwidth bound.

@@ -93,7 +93,7 @@ enum Solver {
     /// default bounds (one substep, CG tolerance 1e-2, at most 50 iterations), as far as real
     /// time needs.
     Adaptive,
-    /// Adaptive, with the scene's self-collision on (issue 16's acceptance row).
+    /// Adaptive, with the scene's self-collision on (the self-collision latency row).
     AdaptiveSelf,
     /// The same with `joint_velocity_limits: false`: each jump reached in one step.
     AdaptiveSelfUnlimited,
@@ -405,7 +405,7 @@ impl std::fmt::Display for Solver {
 /// Rows: DDS (the README table) and the same pipeline without DDS (channels straight to the
 /// simulation thread), which separates the node's own latency from the middleware's.
 /// `DRAPE_LATENCY_ROWS=direct` runs only the latter (quick iterations on the pipeline), `self`
-/// only the self-collision row of issue 16's acceptance.
+/// only the self-collision row.
 fn main() {
     if !netns::enter("node_latency") {
         return;

@@ -1,7 +1,7 @@
 //! Overhead of the sweep machinery: the same recordings run by `drape sweep run --local -j 1`
 //! (plan checks, one process per job, sha256, result records, the manifest) and one by one with
 //! `drape record` on the jobs' scenes. Prints both wall times and the overhead in percent
-//! (issue 17 asks for under 2 %). Run on an idle machine: `cargo bench --bench sweep`.
+//! (the target is under 2 %). Run on an idle machine: `cargo bench --bench sweep`.
 //! `DRAPE_SWEEP_BENCH_JOBS` (default 8) and `DRAPE_SWEEP_BENCH_DURATION` (default 2.0 s of
 //! simulated time per job) size it.
 

@@ -6,9 +6,9 @@
 //! Why not `rayon::join`: called from outside the pool (the simulation's own thread), each join
 //! hands the work to a pool thread and puts the caller to sleep until it is done; from inside
 //! the pool, a join whose other worker went to sleep wakes it (a PCG iteration forks a dozen
-//! times: at 64x64 rayon's two threads solved no faster than one). On this 2-vCPU
-//! virtual machine a sleeping thread's wake-up costs ~4 us when the other vCPU is busy and
-//! ~35 us or more when it idles (the hypervisor must wake a halted vCPU); an explicit substep
+//! times: at 64x64 rayon's two threads solve no faster than one). On a 2-vCPU virtual machine
+//! a sleeping thread's wake-up costs microseconds when the other vCPU is busy and tens of
+//! microseconds when it idles (the hypervisor must wake a halted vCPU); an explicit substep
 //! joins twice, so on an idle machine the wake-ups cost more than the work. Here the caller runs
 //! the first half itself and only waits, spinning, for a second half already running: if the
 //! helper has not picked it up by the time the first half is done (asleep, or preempted by

@@ -1,9 +1,8 @@
 //! The collision stage and its coupling to the solver, bit for bit: scenes through the stage's
 //! paths (self-collision with impact zones, box edges and wedges under the implicit solver with
 //! its held-contact feedback, a robot that grasps and releases, projection response with an
-//! explicit integrator) hash to the values recorded before the coupling between solver and
-//! stage was reorganised (issue 15; recorded on simcol at 8f987f2, main's arithmetic with the
-//! collision files split). `tests/step_bitwise.rs` and
+//! explicit integrator) hash to the recorded values, which a reorganisation of the stage or of
+//! its coupling to the solver must reproduce. `tests/step_bitwise.rs` and
 //! `tests/implicit_bitwise.rs` cover the integrators.
 //!
 //! A mismatch means an operation moved to another order somewhere in the collision stage or
@@ -84,45 +83,9 @@ const CASES: &[Case] = &[
 ];
 
 const EXPECTED: &[(&str, u64)] = &[
-    // Re-recorded when the self-contact broad phase became a BVH with normal cones, and again
-    // when the repulsion and CCD passes became Jacobi (weighted mean per vertex, independent of
-    // the pair order). crumple64_near recorded on main at 44f4f5a, before the near pairs got
-    // their own list and test. pick12_robot re-recorded when a held link's interpolated pose
-    // stopped drifting by round-off (`Pose::lerp` ends exactly on its poses): the still robot
-    // is a still obstacle again. crumple64_near and chair16_edges re-recorded when a collision
-    // pass that moved a vertex more than a third of its spacing came to split the substep
-    // (`sim/fast.rs`, `jumped`): both land on an obstacle. crumple16_self, crumple64_near,
-    // chair16_edges and pick12_robot re-recorded when the multigrid's iteration counts came to
-    // be read from a step's first solve only (`integrate/implicit/hierarchy.rs`): a step with
-    // refits builds its hierarchy at other solves. crumple64_near and chair16_edges re-recorded
-    // when split substeps came to keep the last full substep's aggregates
-    // (`integrate/implicit/solve.rs`): both split while they land. All four re-recorded when
-    // rows without a strong connection (pinned, or held by a sticking drag) left the
-    // multigrid's aggregates (`integrate/precond/aggregate.rs`). crumple16_self and
-    // crumple64_near re-recorded when proximity stopped answering a vertex within the
-    // contact distance of a triangle's plane but not of the triangle (`proximity.rs`).
-    // chair16_edges re-recorded when an obstacle edge's contact closest at its end (a box
-    // corner) took the separation as its normal, not the two edges' plane normal (`ccd.rs`).
-    // All four re-recorded when a step's active-set rounds came to be solved to 1e-2 first,
-    // then polished to the scene's tolerance (`integrate/implicit/step.rs`). crumple64_near
-    // re-recorded when levels from 512 rows on came to be smoothed in two halves and CG's
-    // vector passes to be summed in two (`integrate/precond/smooth.rs`, `integrate/cg.rs`).
-    // All four re-recorded when a solve whose start meets its tolerance came to leave the
-    // multigrid alone (`integrate/implicit/solve.rs`): its rebuild schedule counts other solves.
-    // All five re-recorded when the obstacle response's friction came to move a vertex that
-    // arrived during the step by its velocity change over the part of the step in contact only
-    // (`collide/respond.rs`, `contact_share`): each lands on an obstacle. The two crumples
-    // again when the vertices self-contact moved came to be tested against the obstacles
-    // again whether or not the vertex pass held them already (`collide/resolve.rs`). All four
-    // implicit cases again when Newton's corrections came to be preconditioned by coarse levels
-    // rebuilt for the iterate's matrix (`integrate/implicit/solve.rs`, `SolveKind::Newton`).
-    // The two crumples again when layers resting on each other came to be held apart by pair
-    // springs inside the implicit solve (`sim/coupling.rs`, `layer_springs`). Those two and the
-    // chair again when a spring stretched beyond what its solve's linearisation predicts came to
-    // send the step to Newton (`integrate/implicit/newton.rs`, `unseen_stretch`). All four
-    // implicit cases again when free vertices heading into a still solid (the ground, the
-    // chair, the table) came to be stopped on its contact layer inside the solve
-    // (`collide/arrival.rs`, `Coupling::arrival_springs`).
+    // The current physics' hashes, in `CASES` order. The contact cases are chaotic: a changed
+    // rounding anywhere in the stage, its feedback to the solver or the solver's preconditioner
+    // moves them all.
     ("crumple16_self", 0x8adab6bcd159ea8e),
     ("crumple64_near", 0x75fc9d7c8fcd2d50),
     ("chair16_edges", 0x348c37ed77b581f2),

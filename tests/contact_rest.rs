@@ -148,7 +148,7 @@ fn strap_over_box_edges_comes_to_rest_with_symplectic_euler() {
     assert_rest_everywhere(IntegratorKind::SymplecticEuler);
 }
 
-/// The shirt of config/shirt.yaml hanging on drape_bot's torso (issue 8's scene): kinetic energy
+/// The shirt of config/shirt.yaml hanging on drape_bot's torso (the garment scene): kinetic energy
 /// and fast vertices over its last simulated second.
 fn shirt_rest(seconds: f64) -> Rest {
     use drape::garment::dress;

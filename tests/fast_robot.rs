@@ -1,4 +1,4 @@
-//! Fast robot links through cloth in full simulations (issue 18, item 4's robot variants):
+//! Fast robot links through cloth in full simulations (the robot variants of fast thin links):
 //! drape_bot's right arm swung at its joint-velocity limits (shoulder pitch 2.0 rad/s, wrist
 //! 3.0 rad/s) up through a towel hanging from a rail in front of it, so that the forearm, the
 //! palm and both fingers (15 mm boxes, a 20 mm cloth spacing) pass where the towel hangs.
@@ -235,14 +235,14 @@ fn run(scene: &Scene) -> Outcome {
 }
 
 /// At the joint-velocity limits, with the towel's friction on the arm and without: no link
-/// passes through the towel, and without friction no edge exceeds issue 18's impact bound plus
+/// passes through the towel, and without friction no edge exceeds the impact stretch bound plus
 /// 10 %, `1 + 2 v / c + M g / k` (the fingertips at `v` = 2.0 rad/s x 0.75 m + 3.0 rad/s x 0.1 m,
 /// the factor 2 for the front reflected at the rail). With friction 0.3 the rising arm drags the
-/// towel up against its rail (1.21x rest: a capstan, not an impact; reported, not judged).
-/// Without friction the largest edge is 1.151 (t = 0.53 s, made by the collision pass) against
-/// 1.157: the run is chaotic, and ten neighbouring runs (shoulder 1.85-2.05 rad/s, thickness 4
-/// and 4.5 mm) read 1.06-1.15; before a pass that jumps a vertex over a third of its spacing
-/// split the substep (`sim/fast.rs`, `jumped`), this one read 1.18 and one of those 1.28.
+/// towel up against its rail (a capstan, not an impact; reported, not judged). Without friction
+/// the largest edge comes close to the bound, made by the collision pass; the run is chaotic,
+/// and neighbouring runs (shoulder speed, thickness) scatter below it. A pass that jumps a
+/// vertex over a third of its spacing splits the substep (`sim/fast.rs`, `jumped`), which keeps
+/// such jumps from stretching the towel past the bound.
 ///
 /// Before the edge-edge contact normal of a vertex against a segment was its separation, this
 /// diverged at t = 0.59 s: the towel draped over the forearm's axis at one vertex, its two

@@ -1,4 +1,4 @@
-//! Acceptance of issue 8 on config/shirt.yaml: sewing closes every seam, the weld gives one
+//! The garment pipeline on config/shirt.yaml: sewing closes every seam, the weld gives one
 //! manifold garment with the expected vertex count, no self-intersection or body penetration,
 //! and the shirt then hangs on the torso and follows it when the robot moves.
 

@@ -1,4 +1,4 @@
-//! Hostile input against the built `drape` binary (issue 19): every kind of input a hostile or
+//! Hostile input against the built `drape` binary: every kind of input a hostile or
 //! careless user can hand to `drape check` / `drape record` (scene YAML, URDF, meshes, joints
 //! bag, command-line values), each run as a child process with a time limit and a memory limit.
 //!

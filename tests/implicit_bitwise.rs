@@ -1,7 +1,7 @@
 //! The implicit step's trajectories, bit for bit: a few scenes through the implicit solver's
 //! paths (multigrid with parallel halves, Newton iterations, held contacts with in-solve
-//! friction and their constraint impulses, obstacle edges as contact springs) hash to the values
-//! recorded on main at 06d618b, before the solver's files were split (issue 15). The explicit
+//! friction and their constraint impulses, obstacle edges as contact springs) hash to the
+//! recorded values, which a reorganisation of the solver's code must reproduce. The explicit
 //! paths have their own record in `tests/step_bitwise.rs`.
 //!
 //! A mismatch means an operation moved to another order somewhere in the solver or its
@@ -60,26 +60,11 @@ const CASES: &[Case] = &[
 ];
 
 const EXPECTED: &[(&str, u64)] = &[
-    // All four re-recorded when rows without a strong connection (pinned corners, vertices held
-    // by a sticking drag) left the multigrid's aggregates (`integrate/precond/aggregate.rs`):
-    // the preconditioner changed, so CG's iterates round differently.
+    // The current physics' hashes, in `CASES` order: the preconditioner's structure and every
+    // summation order of CG show in all four, the collision stage's response in the contact
+    // cases.
     ("hanging64_implicit", 0xc29a9456a770c50b),
     ("hanging24_implicit_all", 0xc5404a175a51d3fe),
-    // The two contact cases re-recorded before, when the multigrid's iteration counts came to
-    // be read from a step's first solve only (`integrate/implicit/hierarchy.rs`), and again
-    // when a step's active-set rounds came to be solved to 1e-2 first, then polished to the
-    // scene's tolerance (`integrate/implicit/step.rs`); the two without contact did not move.
-    // All four re-recorded when levels from 512 rows on came to be smoothed in two halves and
-    // CG's vector passes from 2048 to be summed in two (`integrate/precond/smooth.rs`,
-    // `integrate/cg.rs`): other round-off, the same solver. The two contact cases again when a
-    // solve whose start meets its tolerance came to leave the multigrid alone
-    // (`integrate/implicit/solve.rs`): its rebuild schedule counts other solves. The two
-    // contact cases again when the obstacle response's friction came to move a vertex that
-    // arrived during the step by its velocity change over the part of the step in contact only
-    // (`collide/respond.rs`, `contact_share`), and again when Newton's corrections came to be
-    // preconditioned by coarse levels rebuilt for the iterate's matrix (`SolveKind::Newton`).
-    // Both again when free vertices heading into a still solid came to be stopped on its
-    // contact layer inside the solve (`collide/arrival.rs`, `Coupling::arrival_springs`).
     ("sphere24_implicit_contact", 0xf6a9e6d495f97948),
     ("table24_implicit_edges", 0x7b8da34625a24c0d),
 ];

@@ -1,7 +1,7 @@
-//! Issue 7: a very stiff cloth (stretch 1e6 N/m) stepped implicitly at 1/60 s must not gain
-//! energy, so the divergence guard never has to subdivide. Before the Newton iterations of the
-//! implicit step, every frame of this case was subdivided (one linearised solve turns the
-//! rotation of stiff springs into stretch energy: see `EnergyCheck` in src/integrate/implicit.rs).
+//! A very stiff cloth (stretch 1e6 N/m) stepped implicitly at 1/60 s must not gain energy, so
+//! the divergence guard never has to subdivide. Without the Newton iterations of the implicit
+//! step, every frame of this case would be subdivided (one linearised solve turns the rotation
+//! of stiff springs into stretch energy: see `EnergyCheck` in src/integrate/implicit/newton.rs).
 
 use drape::hard::{catalogue, Resolution};
 

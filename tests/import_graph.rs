@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 /// Cycles tolerated while a redesign is under way: each entry is a set of files (relative to
 /// `src/`), and a cycle is tolerated while all its files lie in one entry. Only files of
 /// `effects`, `integrate`, `collide` and `sim` may be named here (checked below). Empty: the
-/// issue-15 redesign removed every cycle (the core's, mesh's and scene's).
+/// import graph has no cycle (in the core, mesh or scene).
 const KNOWN_CYCLES: &[&[&str]] = &[];
 
 /// Cycles outside the core tolerated the same way; empty.

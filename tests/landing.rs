@@ -6,8 +6,8 @@
 use drape::scene::Scene;
 use std::path::Path;
 
-/// Issue 16's S1 (`benches/scenes/bench_s1.yaml`) at `res` x `res`, and issue 18's impact bound
-/// plus 10 % for its landing, `1.1 (1 + 2 v / c + M g / k)`.
+/// The contact bench's S1 (`benches/scenes/bench_s1.yaml`) at `res` x `res`, and the impact
+/// stretch bound plus 10 % for its landing, `1.1 (1 + 2 v / c + M g / k)`.
 fn s1(res: usize) -> (drape::sim::Simulation, f64) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/scenes/bench_s1.yaml");
     let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -19,13 +19,12 @@ fn s1(res: usize) -> (drape::sim::Simulation, f64) {
     (scene.build().unwrap_or_else(|e| panic!("{e}")), bound)
 }
 
-/// Issue 16's S1 at 32 x 32 (`benches/scenes/bench_s1.yaml`: a 1 m cloth dropped flat from
-/// 1.0 m onto a still sphere of radius 0.3 m at 0.5 m, implicit at 60 Hz, one substep a frame):
-/// over its first second (landing at `v = sqrt(2 g 0.2 m)` = 1.98 m/s, then sliding on the ball
-/// and flapping), no mesh edge exceeds issue 18's impact bound plus 10 %,
-/// `1.1 (1 + 2 v / c + M g / k)` = 1.164 (`c = sqrt(k / rho)` = 70.7 m/s, `M` = 0.2 kg).
-/// Measured: 1.119 at t = 0.40 s; 1.249 at 0.32 s while the pass could jump a vertex by any
-/// fraction of its spacing.
+/// The contact bench's S1 at 32 x 32 (`benches/scenes/bench_s1.yaml`: a 1 m cloth dropped flat
+/// from 1.0 m onto a still sphere of radius 0.3 m at 0.5 m, implicit at 60 Hz, one substep a
+/// frame): over its first second (landing at `v = sqrt(2 g 0.2 m)` = 1.98 m/s, then sliding on
+/// the ball and flapping), no mesh edge exceeds the impact stretch bound plus 10 %,
+/// `1.1 (1 + 2 v / c + M g / k)` = 1.164 (`c = sqrt(k / rho)` = 70.7 m/s, `M` = 0.2 kg). A pass
+/// free to jump a vertex by any fraction of its spacing would break it.
 #[test]
 fn a_cloth_dropped_on_a_sphere_lands_within_the_impact_bound() {
     let (mut sim, bound) = s1(32);
@@ -89,10 +88,11 @@ fn a_cloth_landing_on_a_sphere_is_stopped_in_the_solve_not_split() {
 /// slope's `tan a`, sticks where it hits: each vertex ends on the plane's contact layer straight
 /// below where it started, whatever share of the landing substep it fell before touching.
 /// Exact up to the in-solve friction's creep, at most its `STICK_SPEED` (1e-4 m/s,
-/// `integrate/friction.rs`) over the 1.5 s run: 0.15 mm. The collision pass's Coulomb friction undoes the tangential motion of the
-/// substep; it once undid the whole substep's, the free fall before the hit included, and put
-/// the cloth up the slope by `v sin(a) h` times the share fallen (up to 11 mm here; on issue
-/// 16's S1 such jumps at the sphere's rim stretched landing edges to 1.58x rest).
+/// `integrate/friction.rs`) over the 1.5 s run: 0.15 mm. The collision pass's Coulomb friction
+/// undoes the tangential motion of the substep since the vertex touched only: undoing the whole
+/// substep's, the free fall before the hit included, would put the cloth up the slope by
+/// `v sin(a) h` times the share fallen (up to 11 mm here; on the contact bench's S1 such jumps
+/// at the sphere's rim stretch landing edges).
 #[test]
 fn a_cloth_landing_on_a_slope_with_friction_sticks_where_it_hits() {
     let (a, mu, th, dt) = (0.35f64, 0.6f64, 0.005f64, 1.0f64 / 60.0);

@@ -1,4 +1,4 @@
-//! The layering of the core's lower modules, checked on the source text (issue 15): `linalg`
+//! The layering of the core's lower modules, checked on the source text: `linalg`
 //! and `par` sit below everything and import nothing of the simulator; `effects` sits below
 //! `integrate` and never imports it; `collide` takes the velocity filter from `linalg`, not
 //! from `integrate`. Every `crate::` path a file names (in `use` lines or inline) counts.

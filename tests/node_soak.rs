@@ -1,4 +1,4 @@
-//! Soak (issue 7): the node under 1 kHz joint-state input, inside a private network namespace.
+//! Soak: the node under 1 kHz joint-state input, inside a private network namespace.
 //! The input is drained every tick (the command channel holds at most one tick of messages), so
 //! memory must stay flat after warm-up: the test compares the process's resident memory over the
 //! run with what an unbounded backlog of the same input would add, and checks publishing kept
@@ -144,7 +144,7 @@ fn node_under_1khz_joint_states_keeps_memory_flat_and_publishing() {
         sent as f64 >= 0.95 * 1000.0 * run.as_secs_f64(),
         "only {sent} sent"
     );
-    // Publishing kept its rate under the input flood (10% as the issue's rate criterion).
+    // Publishing kept its rate under the input flood (within 10%).
     let rate = clouds_after_warmup as f64 / window;
     assert!(
         (rate - RATE).abs() <= 0.1 * RATE,

@@ -1,4 +1,4 @@
-//! `drape render` draws the scene's static obstacles (issue 17): a scene YAML recorded with
+//! `drape render` draws the scene's static obstacles: a scene YAML recorded with
 //! `drape record` and drawn with `drape render` has pixels of the obstacles' colour where each
 //! obstacle projects, a ground plane under the cloth, and none of either without them.
 #![cfg(feature = "ros")]

@@ -186,10 +186,10 @@ fn cape_stays_out_of_the_swinging_arms() {
 /// sweeps through the cape's hem at about 0.7 m/s, carrying the hem held against it by
 /// friction. That friction is solved with the cloth (a drag towards the forearm's velocity), so
 /// the hem's neighbours follow within the same solve. Applied by the collision stage after the
-/// solve, it moved each held vertex alone by up to its whole slip over the substep (3.9 mm of a
-/// 12.8 mm spacing) and stretched the hem's edges to 1.20x rest in every substep of the sweep
-/// (1.23x without self-collision). Bound: the case's own, issue 18's impact bound at the arms'
-/// 1.2 m/s plus 10 % (`src/hard/self_contact.rs`, `cape_swinging`), on every frame.
+/// solve, it would move each held vertex alone by up to its whole slip over the substep (a good
+/// part of the spacing) and stretch the hem's edges in every substep of the sweep. Bound: the
+/// case's own, the impact stretch bound at the arms' 1.2 m/s plus 10 %
+/// (`src/hard/self_contact.rs`, `cape_swinging`), on every frame.
 #[test]
 fn the_forearm_sweeping_the_cape_drags_its_hem_without_stretching_it() {
     use drape::hard::{catalogue, Resolution};

@@ -1,7 +1,8 @@
-//! The explicit step's speed work must not change a single bit of the physics: trajectories of a
+//! Speed-ups of the explicit step must not change a single bit of the physics: trajectories of a
 //! few hundred explicit steps (sequential and two-thread sizes, every explicit integrator, the
 //! velocity-dependent and energy-injecting effects, the guard's subdivision and a contact scene)
-//! hash to the values recorded on the build before the optimisations (main at 50c56f8).
+//! hash to the recorded values: those of the plain, unoptimised step, which every speed-up of
+//! the explicit path must reproduce (the contact case with the current obstacle response).
 //!
 //! A mismatch means rounding changed somewhere in the force, update or guard path; since contact
 //! scenes are chaotic, that would flip unrelated round-off-sensitive tests. To re-record after a
@@ -117,7 +118,7 @@ const CASES: &[Case] = &[
     },
 ];
 
-/// Hashes recorded before the speed work, in `CASES` order.
+/// The recorded hashes, in `CASES` order.
 const EXPECTED: &[(&str, u64)] = &[
     ("hanging64_symplectic_base", 0x7c4b3ee4fc6734f9),
     ("hanging32_symplectic_base", 0xc8a862d15dfdf111),
@@ -125,9 +126,6 @@ const EXPECTED: &[(&str, u64)] = &[
     ("hanging64_explicit_all", 0x853b7152ec85c602),
     ("hanging48_rk4_all", 0xb15148c1b6b7144f),
     ("hanging32_symplectic_subdivided", 0x7aee1c713d3069ea),
-    // Re-recorded when the obstacle response's friction came to move a vertex that arrived
-    // during the step by its velocity change over the part of the step in contact only
-    // (`collide/respond.rs`, `contact_share`).
     ("sphere32_symplectic_contact", 0x4a6a92fe48dc88ce),
 ];
 

@@ -2,8 +2,8 @@
 //! start velocity predicts ends in a static solid's contact layer. The implicit solve holds
 //! each with a one-sided spring on the layer's tangent plane (see `sim::coupling`), so a
 //! vertex that whips in is stopped inside the solve, with its neighbours, instead of being
-//! pushed back out alone by the response after it (which stretched its edges and split the
-//! substep when the push exceeded a third of a spacing: S1 128x128's landing).
+//! pushed back out alone by the response after it (which stretches its edges, and splits the
+//! substep when the push exceeds a third of a spacing: S1 128x128's landing).
 
 use super::motion::Motion;
 use super::obstacle::Obstacle;
@@ -33,7 +33,7 @@ impl CollisionStage {
     /// the contact layer of a static solid (or crosses into it) while they start clear of that
     /// layer, into `out` (one arrival per vertex: the deepest predicted end). Moving obstacles
     /// are left to fast-contact splitting, surfaces (two-sided) and half-spaces' far side to
-    /// the response as before.
+    /// the response.
     pub fn arrivals(
         &self,
         x: &[Vec3],

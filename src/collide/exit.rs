@@ -43,11 +43,11 @@ pub(crate) fn exit_of(exits: &[Exit], vertex: usize, obstacle: usize) -> Option<
 ///
 /// Why: the lead-out moves a patch that should never have been inside; friction against the
 /// solid it leaves is no physics of that motion. A vertex beside drape_bot's forearm, pulled
-/// into it by a neighbour rising out of it, was pushed back each substep and its friction, a
-/// half of that push, held it while the neighbour rose: like a rope round a capstan their edge
-/// grew to 1.42x rest (60 x 60 cloth; 1.24x now). The exiting vertices keep their friction:
-/// without it the hem of a cape led up out of drape_bot's base slid sideways in the box, and
-/// the cape above, pushed up flat, buckled in one frame (1.38x at 48 x 52; 1.19x with it).
+/// into it by a neighbour rising out of it, is pushed back each substep, and its friction, a
+/// half of that push, would hold it while the neighbour rises: like a rope round a capstan
+/// their edge would grow far past rest. The exiting vertices keep their friction: without it
+/// the hem of a cape led up out of drape_bot's base slides sideways in the box, and the cape
+/// above, pushed up flat, buckles in one frame.
 pub(crate) fn slip_around(exits: &[Exit], neighbours: &[u32], out: &mut Vec<(u32, u32)>) {
     out.clear();
     for e in exits {

@@ -3,8 +3,8 @@
 //! A vertex pressed into two surfaces (cloth wedged between a robot's hand and the top of its
 //! base) must keep its normal velocity on BOTH: `S = I - n1 n1^T` for only one of them lets the
 //! spring forces drive it straight into the other obstacle, whose layer the collision stage then
-//! restores by moving the position alone. Each substep that stored the solver's push in the
-//! springs (0.2 J -> 110 J in 0.15 s at the wedge). Two independent normals leave one free
+//! restores by moving the position alone. Each substep stores the solver's push in the springs,
+//! and the wedged cloth gains energy without bound. Two independent normals leave one free
 //! direction, their edge line `e = n1 x n2 / |n1 x n2|` (`S = e e^T`); three leave none.
 
 use crate::linalg::Filter;
@@ -41,8 +41,8 @@ impl HeldNormals {
         let mut h = Self::default();
         for (n, s) in contacts {
             // Contact normals are unit already; normalizing again would change them by rounding,
-            // and the cloth's contact chatter amplifies even that (tests/contact_rest.rs's shirt:
-            // 48 -> 74 fast vertices).
+            // and the cloth's contact chatter amplifies even that (more fast vertices on
+            // tests/contact_rest.rs's shirt).
             if !(n.is_finite() && s.is_finite()) || (n.length_squared() - 1.0).abs() > 1e-6 {
                 continue;
             }

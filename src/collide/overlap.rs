@@ -4,11 +4,11 @@
 //! and have none).
 //!
 //! Why one direction per patch: each vertex pushed to its own nearest face splits a patch
-//! across the obstacle. A cape whose hem hung 5 cm into drape_bot's base box (the box 10 cm
-//! high) had its lowest row pushed under the box and the row above onto its top: the box
-//! stayed between them for good, the edge at 4.46x its rest length, and the guard subdivided
-//! 7952 times in 2 s. A patch leaves the way it came in: along the mean outward normal where
-//! its mesh edges cross the surface to the cloth outside.
+//! across the obstacle. A cape whose hem hangs 5 cm into drape_bot's base box (the box 10 cm
+//! high) would have its lowest row pushed under the box and the row above onto its top: the
+//! box would stay between them for good, the edges between them stretched over it, and the
+//! guard would subdivide nearly every step. A patch leaves the way it came in: along the mean
+//! outward normal where its mesh edges cross the surface to the cloth outside.
 
 use super::exit::{slip_around, Exit};
 use super::features::FeatureCollider;
@@ -122,7 +122,7 @@ impl CollisionStage {
     ///
     /// A patch holding a kinematic vertex (`kinematic`: pinned or attached inside by the scene)
     /// gets no plan: it cannot leave as one, and its free vertices are projected to their
-    /// nearest face each pass as before (a sheet pinned at a ball's centre).
+    /// nearest face each pass (a sheet pinned at a ball's centre).
     pub fn plan_exits(&mut self, x: &[Vec3], kinematic: &[u32]) {
         self.exits.clear();
         self.exit_neighbours.clear();
@@ -225,8 +225,8 @@ impl CollisionStage {
             for &v in &patch {
                 // Every vertex leaves the solids it is in and the contact layers `dir` leads out
                 // of (one under a face `dir` leads into stays the vertex pass's). A vertex inside
-                // the palm and in a finger's layer, left to the vertex pass for the finger, was
-                // pushed 5.4 mm along the cloth in one pass (1.67x rest at 44 x 44).
+                // the palm and in a finger's layer, left to the vertex pass for the finger, would
+                // be pushed millimetres along the cloth in one pass, stretching its edges.
                 let local_dir = |oi: usize| obstacles[oi].pose.rotation.inverse() * dir;
                 if !inside[v].is_empty() {
                     rim[v] = layer_of(v);
@@ -291,9 +291,9 @@ impl CollisionStage {
                 return true;
             }
             // Out: it waits for its neighbours, and goes on out while an edge of its cuts the
-            // solid. Let go while the one next to it was still inside, a vertex of the arm's
-            // patch (friction 0.5) ended on the far side of the forearm from it, their edge
-            // (skipped by the features meanwhile) through the axis: 3.46x rest for a frame.
+            // solid. Let go while the one next to it is still inside, a vertex of the arm's
+            // patch (friction 0.5) can end on the far side of the forearm from it, their edge
+            // (skipped by the features meanwhile) through the axis and stretched across it.
             let (mut waits, mut cuts) = (false, false);
             for &k in &neighbours[e.first as usize..(e.first + e.count) as usize] {
                 let Some(q) = x.get(k as usize) else { continue };

@@ -9,8 +9,8 @@ use crate::Vec3;
 /// The contacts sorted by vertex (contact order kept within a vertex), for the passes that
 /// look at all of one vertex's contacts together. A vertex on its way out of an obstacle it
 /// started inside is not pressed against that obstacle's surface: its lead-out contact stays
-/// out (a wedge with the palm projected a vertex leaving a finger out of the finger's side at
-/// once, and its edge to the next finger's vertex to 2.2x rest).
+/// out (otherwise a wedge with the palm projects a vertex leaving a finger out of the finger's
+/// side at once, stretching its edge to the next finger's vertex far past rest).
 pub(super) fn contacts_by_vertex(contacts: &[Contact], exits: &[Exit]) -> Vec<Contact> {
     let mut by_vertex: Vec<Contact> = (contacts.iter())
         .filter(|c| exit_of(exits, c.vertex as usize, c.obstacle).is_none())

@@ -91,8 +91,8 @@ impl CollisionStage {
         // A pinched vertex cannot be `thickness` from both surfaces, so neither can the cloth
         // edges and faces around it be from the obstacles' edges: their feature contacts push it
         // along a slanted normal, the vertex pass and the centring restore only its height, and
-        // the sideways part accumulated every substep, squeezing the cloth out from under a press
-        // (9 J of spring energy, 3.1 m/s). Its place is the pinch's: undo the feature pass on it.
+        // the sideways part would accumulate every substep, squeezing the cloth out from under a
+        // press at metres per second. Its place is the pinch's: undo the feature pass on it.
         for &(i, x, v) in &pinched {
             (x1[i], v1[i], moved[i]) = (x, v, false);
         }
@@ -152,18 +152,15 @@ const SELF_OBSTACLE_ROUNDS: usize = 4;
 impl CollisionStage {
     /// Cloth against itself, then the vertices it moved against the obstacles again, and where
     /// that moved any, CCD against itself once more (no second repulsion: it would push the
-    /// pairs the first left short again, doubling the push cap; 2x crumple 1.36 -> 1.66), up
-    /// to [`SELF_OBSTACLE_ROUNDS`] times. A cloth-cloth correction moves a layer as far as the
-    /// pair needs, which can carry a vertex into an obstacle: crumple_heap at 32x32 ended a
-    /// substep with a vertex 3.2 mm below the ground, at 14x14 a frame with one 2.7 mm below
-    /// it, unmeasured (only the vertex pass's contacts were). Every vertex it moved is tested,
-    /// those the vertex pass held against an obstacle too: they answer cloth-cloth contact as
-    /// heavier, but still give way, and left out, crumple.yaml at 30x30 ended a frame with one
-    /// 0.08 mm below the ground, and at other resolutions from 16x16 to 40x40 frames with
-    /// vertices up to 4.4 mm into its 6 mm thickness layer (none now, at any of them). Not
-    /// those on their way out of an obstacle the scene started them in: each round's lead-out
-    /// would move them again (`tests/start_inside.rs`' cape with self-collision: an edge at
-    /// 1.415x rest, bound 1.333).
+    /// pairs the first left short again, doubling the push cap and overstretching the 2x
+    /// crumple), up to [`SELF_OBSTACLE_ROUNDS`] times. A cloth-cloth correction moves a layer
+    /// as far as the pair needs, which can carry a vertex into an obstacle, and unmeasured:
+    /// without the re-test a crumpled heap ends substeps with vertices millimetres below the
+    /// ground. Every vertex it moved is tested, those the vertex pass held against an obstacle
+    /// too: they answer cloth-cloth contact as heavier, but still give way, and left out,
+    /// crumple.yaml ends frames with vertices inside the ground's thickness layer. Not those on
+    /// their way out of an obstacle the scene started them in: each round's lead-out would move
+    /// them again (`tests/start_inside.rs`' cape with self-collision overstretches).
     #[allow(clippy::too_many_arguments)]
     fn resolve_self(
         &mut self,

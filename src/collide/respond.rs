@@ -18,8 +18,8 @@ use crate::Vec3;
 
 /// A vertex within `th (1 + REST_BAND)` of an obstacle is in contact without being pushed. The
 /// implicit solver's filter holds a contact vertex's normal velocity at the surface's, so it ends
-/// the step exactly `th` away (up to rounding): with a strict `< th` test that contact was
-/// dropped, the next step ran unconstrained (falling into the layer), the one after constrained
+/// the step exactly `th` away (up to rounding): with a strict `< th` test that contact would be
+/// dropped, the next step run unconstrained (falling into the layer), the one after constrained
 /// again, and so on, every other step without the filter and alternating with the vertices
 /// around it: a jitter of resting cloth. The band (6 um at 6 mm) is far above rounding and far
 /// below any visible gap.
@@ -147,11 +147,11 @@ pub(crate) fn obstacle_vertex(
 /// The share of the step a vertex spent in contact, moving from `a` to `p` (local) against the
 /// tangent plane at `q` with normal `n`: 1 when it started within the contact layer `th`, else
 /// the part of its path after it entered the layer. The friction of a vertex that arrived
-/// during the step acted only from then on; undoing the whole step's tangential motion put a
-/// vertex landing on a slope back up it, where its free fall started, and on issue 16's S1 (a
-/// cloth dropped on a sphere, friction 0.5) moved the vertices reaching the sphere's rim up to 9
-/// mm of a 16 mm spacing inwards while their neighbours fell on: edges to 1.58x rest, and the
-/// landing split into 40 more substeps (`sim/fast.rs`, `jumped`; 8 now).
+/// during the step acts only from then on; undoing the whole step's tangential motion would put
+/// a vertex landing on a slope back up it, where its free fall started, and on the contact
+/// bench's S1 (a cloth dropped on a sphere, friction 0.5) would pull the vertices reaching the
+/// sphere's rim inwards by a good part of a spacing while their neighbours fall on, stretching
+/// their edges and splitting the landing into many more substeps (`sim/fast.rs`, `jumped`).
 fn contact_share(a: Vec3, p: Vec3, q: Vec3, n: Vec3, th: f64) -> f64 {
     let (d0, d1) = (n.dot(a - q), n.dot(p - q));
     if d0 > th && d1 < d0 {

@@ -131,7 +131,7 @@ collision: { mode: continuous }
     // The sheet falls around the ball from 0.5 m: speeds of free fall over at most 0.6 m, 2x.
     let mut criteria = Criteria::base(1.5, 2.0 * (2.0 * G * 0.6f64).sqrt());
     // The initial state is infeasible: free vertices within the ball are led out of it over
-    // the first frames, stretching the springs to the pinned ones once (~17 J here). Energy is
+    // the first frames, stretching the springs to the pinned ones once (joules here). Energy is
     // judged from the end of the frame they are all out on.
     criteria.energy_from_frame = 1;
     Ok(Case {
@@ -147,8 +147,8 @@ collision: { mode: continuous }
 
 /// robot_cape.yaml with the cape 5 cm longer, its hem 5 cm into drape_bot's 10 cm base box (two
 /// rows of vertices): the cloth is led out upwards, the way it came in, while the arms swing.
-/// Pushed to each vertex's nearest face instead, the box ended between two rows for good (an
-/// edge at 4.46x rest, 7952 guard subdivisions in 2 s).
+/// Pushed to each vertex's nearest face instead, the box would end between two rows for good
+/// (the edges across it stretched over it, the guard subdividing nearly every step).
 pub(super) fn cape_hem_inside_base(res: Resolution) -> Result<Case, HardError> {
     let name = "cape_hem_inside_base";
     let mut scene = bundled_scene(name, "robot_cape.yaml")?;
@@ -184,8 +184,9 @@ pub(super) fn cape_hem_inside_base(res: Resolution) -> Result<Case, HardError> {
 /// from both sides and leaves across the cloth, to the nearer side, as one, its rim (outside the
 /// arm, inside its contact layer) with it. Judged over the first second, while the arm is still:
 /// the lead-out moves a vertex at most `EXIT_STEP` of its shortest edge a pass, and the solve
-/// follows within a pass, so no edge exceeds `1 + 2 EXIT_STEP` (4/3). Before the rim left with
-/// the patch, the vertex pass pushed it sideways in the cloth's plane: 2.91x rest (friction 0.5).
+/// follows within a pass, so no edge exceeds `1 + 2 EXIT_STEP` (4/3). The rim leaves with the
+/// patch: left to the vertex pass, it would be pushed sideways in the cloth's plane, its edges
+/// far past rest (friction 0.5).
 pub(super) fn arm_lying_in_cloth(res: Resolution) -> Result<Case, HardError> {
     let name = "arm_lying_in_cloth";
     let mut scene = bundled_scene(name, "robot_drape_arm.yaml")?;
@@ -244,10 +245,10 @@ cloths:
             ("NV", nv.to_string()),
         ],
     );
-    // The guard's default energy_growth (0.5) let one implicit substep gain 11.5 J beyond the
-    // wind's work (30 % of the flag's energy) as the flag snapped taut at t = 0.13 s: the single
+    // The guard's default energy_growth (0.5) lets one implicit substep gain a large share of
+    // the flag's energy beyond the wind's work as the flag snaps taut early on: the single
     // linearised solve overshoots on strongly stretched springs. 0.05 makes the guard halve
-    // those substeps (3 in the first second).
+    // those few substeps.
     let scene = parse("wind_50_m_s", &text)?;
     let sim = build("wind_50_m_s", &scene)?;
     // Normal drag pushes every vertex toward the wind's (normal) velocity; the fastest wind is

@@ -27,9 +27,9 @@ collision: { mode: continuous }
     let sim = build("impact_20_m_s", &scene)?;
     let duration = pick(res, 0.15, 0.3);
     // Cloth that rides on the ball moves at its speed; a perfectly elastic bounce off a moving
-    // wall gives 2 V. The sheet's corners whip beyond that as it wraps the ball: at full
-    // resolution a corner reaches 60.9, 60.9 and 60.2 m/s with 2, 8 and 32 substeps per frame
-    // (converged: the model's whip, about 3 V), so a blow-up shows above 4 V.
+    // wall gives 2 V. The sheet's corners whip beyond that as it wraps the ball, to about 3 V at
+    // full resolution whatever the substeps per frame (converged: the model's whip), so a
+    // blow-up shows above 4 V.
     let mut criteria = Criteria::base(V * duration + 0.3 + 1.0, 4.0 * V);
     criteria.energy = EnergyCheck::NotMeasured;
     criteria.max_penetration = Some(0.005);
@@ -50,12 +50,11 @@ pub(super) fn robot_swing(res: Resolution) -> Result<Case, HardError> {
     // right_shoulder_pitch is limited to 2.0 rad/s and right_wrist to 3.0 rad/s (drape_bot.urdf):
     // both swing at exactly their limit (wrist 0 -> 2.9 rad, its position limit, in 0.9667 s;
     // shoulder 1.9333 rad down past the torso in the same time, and back) after the cloth has
-    // settled on the arm for 1 s. The sheet lands on a floor. Without one (first version of this
-    // case) it fell past the base and the descending hand caught it against base_link, reaching
-    // 3 kJ of elastic energy and 104 m/s at full resolution; since vertices pinched between two
-    // facing obstacles sit midway between them (collide/stage.rs) that no longer happens: with the
-    // floor moved 5 m down the full-resolution sheet falls freely to it (9.6 m/s, free fall from
-    // 5 m gives 9.9) with 8e-9 m penetration.
+    // settled on the arm for 1 s. The sheet lands on a floor. Without one it falls past the base
+    // and the descending hand catches it against base_link; vertices pinched between two facing
+    // obstacles sit midway between them (collide/stage.rs), so that does no harm: with the floor
+    // moved 5 m down the full-resolution sheet falls freely to it (free fall from 5 m gives
+    // 9.9 m/s) without penetrating it.
     let text = fill(
         r#"
 effects: [gravity, stretch, shear, bending, damping]
@@ -145,8 +144,8 @@ collision: { mode: continuous }
     let mut criteria = Criteria::base(1.0, 2.0);
     criteria.energy = EnergyCheck::NotMeasured;
     // The two thickness layers overlap: a pinched vertex is put midway between the surfaces,
-    // `gap / 2` from each, i.e. `thickness - gap / 2` = 4.25 mm into both layers. (Before that
-    // fix it was pushed out of one layer into the other obstacle's solid: 8.5 mm.)
+    // `gap / 2` from each, i.e. `thickness - gap / 2` = 4.25 mm into both layers. (Pushed out of
+    // one layer instead, it would land in the other obstacle's solid.)
     criteria.max_penetration = Some(0.005 - 0.5 * 0.0015 + 1e-9);
     Ok(Case {
         name: "pinch_below_thickness",
@@ -188,11 +187,10 @@ collision: { mode: continuous, self_collision: true, count_self_intersections: t
     let mut criteria = Criteria::base(2.0, 2.0 * (2.0 * G * 1.1f64).sqrt());
     // The ground's positional correction does work: a vertex that crosses it within a step is put
     // back on its surface while its neighbours moved on, compressing its springs by up to
-    // d = (1 - toi) v h + thickness at once (1/2 k d^2, about 0.1 J for the first corner here,
-    // gone within a frame), and so does friction's projection of a sticking vertex back against
-    // neighbours the implicit step moved with it (0.2-0.7 J a substep while the heap forms at full
-    // resolution, 12 J put in and damped out over the run; 239 J when the held vertices' friction
-    // took the springs' start-of-step load as its normal impulse). That work is not observable
+    // d = (1 - toi) v h + thickness at once (1/2 k d^2, gone within a frame), and so does
+    // friction's projection of a sticking vertex back against neighbours the implicit step
+    // moved with it (a fraction of a joule a substep while the heap forms at full resolution,
+    // put in and damped out over the run). That work is not observable
     // from outside the collision stage, so energy is reported, not judged; speed, penetration and
     // intersections are (tests/hard_cases.rs bounds the excess at CI resolution).
     criteria.energy = EnergyCheck::NotMeasured;

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 pub(super) const G: f64 = 9.81;
 
-/// Issue 18's impact bound plus 10 %: the strain behind a front of velocity `speed` on a sheet of
+/// The impact stretch bound plus 10 %: the strain behind a front of velocity `speed` on a sheet of
 /// wave speed `c = sqrt(stretch / density)` is `speed / c`, plus the weight of `area` of cloth
 /// on one spring.
 pub(super) fn impact_stretch_bound(speed: f64, stretch: f64, density: f64, area: f64) -> f64 {

@@ -201,8 +201,8 @@ impl Pcg {
         let (mut rnorm2, bnorm2) = (self.rnorm2, self.bnorm2);
         let tol2 = tol * tol;
         if mg.is_none() {
-            // Block Jacobi's inverses (only then: 4096 of them were a tenth of a millisecond a
-            // solve at 64x64, multigrid or not).
+            // Block Jacobi's inverses (only then: computing them for every solve at 64x64
+            // would cost the multigrid solves a noticeable share of their time).
             self.pinv.clear();
             self.pinv.extend((0..n).map(|i| {
                 let di = a.diagonal(i);

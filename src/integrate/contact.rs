@@ -5,7 +5,7 @@
 //! after the solve, by moving the touching segment's vertices back out, it stretches the cloth
 //! over the edge: the solver has already moved their neighbours with them, and the tension of
 //! that stretch presses the cloth onto the edge (a strip that Coulomb lets slide off a table
-//! stuck with 50 times its hanging weight's tension, tests/table_edge.rs). Here each such
+//! sticks under many times its hanging weight's tension, tests/table_edge.rs). Here each such
 //! contact is a spring on the cloth point `c = sum_k w_k x_k` with depth
 //! `d = gap - n . (c - p)` (feature point `p`, normal `n` towards the cloth), energy
 //! `k d^2 / 2` while `d > 0`: force `k d w_k n` on vertex `k`, Jacobian `-k w_k w_l n n^T`.
@@ -189,8 +189,8 @@ impl ContactSpring {
 /// vertex and a face of another layer share no block), applied without a matrix: the exact
 /// `k w_k w_l n n^T` minus the lumped diagonal [`ContactSpring::add_jacobian`] put in `A`.
 /// `A` plus this is the exact backward-Euler matrix, so the solve's forces on a pair's two
-/// sides stay equal and opposite (with the diagonal alone a towel resting on a hammock pushed
-/// it down with 5 times its weight, 1.72 N for 0.34 N); `A` alone, stiffer, preconditions it.
+/// sides stay equal and opposite (with the diagonal alone a towel resting on a hammock pushes
+/// it down with several times its weight); `A` alone, stiffer, preconditions it.
 #[derive(Debug, Default)]
 pub(crate) struct OffPattern {
     terms: Vec<(ContactSpring, f64)>,

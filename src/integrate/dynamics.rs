@@ -36,8 +36,8 @@ pub struct Constraints {
     /// `target_velocity`) if the solve drives them into it, for integrators that release holds
     /// within the step. Only cloth on its way out of a solid it started inside: the collision
     /// stage leads it out a sixth of an edge a pass, so a solve that moves it back in is not
-    /// undone at once. Released at the start, the patch inside drape_bot's forearm was pulled
-    /// 16 mm back in by the solve (its springs, stretched by the patch's upward speed).
+    /// undone at once. Released at the start, the patch inside drape_bot's forearm would be
+    /// pulled back in by the solve (its springs, stretched by the patch's upward speed).
     pub standby: Vec<(usize, Vec3)>,
 }
 

@@ -3,8 +3,8 @@
 //! A vertex held against a surface by the constraint filter slides in the filter's free
 //! directions. Friction applied after the solve (zero the tangential velocity, move the vertex
 //! back) ignores that its neighbours moved on during the step: a cloth edge shoved by a moving
-//! press through a stiff spring stuck its neighbour for a whole substep and stored
-//! `k (v h)^2 / 2` per spring (0.4 J in tests/contact_wedge.rs), released the next substep.
+//! press through a stiff spring would stick its neighbour for a whole substep and store
+//! `k (v h)^2 / 2` per spring (tests/contact_wedge.rs), released the next substep.
 //! Inside the solve, friction is a force in the filter's free directions `S`, affine in `v` so
 //! backward Euler treats it exactly (`A += h J`, `b += h f(v0)`), in one of two modes chosen from
 //! the slip `s = S (v - reference)` at the start of the step:
@@ -16,8 +16,8 @@
 //!   with `g (sin a - mu cos a)`;
 //! - *sticking*: a stiff viscous drag `-(mu N / max(|s|, STICK_SPEED)) S (v - reference)`, which
 //!   the springs act against within the same solve. Under a load `F` above `mu N` it slides
-//!   from the next substep on (before the modes were lagged, its slip grew by `F / (mu N)` per
-//!   substep until it did: ~30 substeps at 1.2 times the limit).
+//!   from the next substep on (with modes decided from the slip alone, its slip would grow by
+//!   only `F / (mu N)` per substep until it slid: dozens of substeps just above the limit).
 //!
 //! `N` lags one substep (IPC's lagged friction), and so does the mode: it is chosen before the
 //! solve from the slip at the start of the step and the tangential load the rest of the system
@@ -28,9 +28,9 @@
 //! solved once more; a slider whose slip reversed sticks from the next step on (the fit lets
 //! only those slide that Coulomb would not stop against the last load, so a reversal needs the
 //! load to drop within the step). Refitting both ways, with modes from the start slip only,
-//! chattered on a cloth draped over a sphere: 64 of ~900 held vertices changed mode after
-//! every solve, each step solved 2.9 times (README, "The solve under contact": why the
-//! iterations rise).
+//! chatters on a cloth draped over a sphere: dozens of held vertices change mode after every
+//! solve, and each step is solved about three times (README, "The solve under contact": why
+//! the iterations rise).
 
 use crate::linalg::outer;
 use crate::linalg::BlockCsr;

@@ -11,9 +11,9 @@ use crate::integrate::IntegratorKind;
 use crate::Vec3;
 use std::path::{Path, PathBuf};
 
-/// Bumped whenever the scenes, the reference method or the physics a scene runs change, to
-/// invalidate old caches: v2 when the obstacle response's friction came to act over the part of
-/// a step in contact only (`collide/respond.rs`), which moved the sphere drape's reference.
+/// Bumped whenever the scenes, the reference method or the physics a scene runs change (the
+/// obstacle response's friction moves the sphere drape's reference, for one), to invalidate
+/// old caches.
 const FORMAT: &str = "drape-study-reference v2";
 
 /// How many finer levels are tried when RK4 is unstable at the requested step.

@@ -31,7 +31,7 @@ pub(crate) struct ClothState<'a> {
     pub sprung: &'a [[u32; 3]],
     /// Vertices on their way out of an obstacle they started inside (`overlap.rs`): features
     /// skip their faces and edges, which cross the obstacle by construction (the arm's rod axes
-    /// and box edges pushed those patches out sideways at once, 3.5x rest).
+    /// and box edges would push those patches out sideways at once, tearing them far past rest).
     pub exits: &'a [Exit],
     /// (vertex, obstacle) pairs without friction beside a lead-out (`exit::slip_around`).
     pub slip: &'a [(u32, u32)],
@@ -72,6 +72,6 @@ pub struct FeatureContact {
 /// than this fraction of the contact distance into it (a safety net: the spring's deflection
 /// under load is micrometres). Above it, a push by position would stretch the cloth over the
 /// edge: the solver moves the segment's vertices with their neighbours and the push moves only
-/// them back, and that spurious tension's normal force gripped a strip the hanging weight pulls
-/// off a table 50 times more than its weight (tests/table_edge.rs).
+/// them back, and that spurious tension's normal force grips a strip the hanging weight pulls
+/// off a table with many times its weight (tests/table_edge.rs).
 pub const DEEP: f64 = 0.5;

@@ -49,8 +49,8 @@ pub(super) fn respond(
             .unwrap_or_else(|| (0..3).map(|k| hit.w[k] * s.friction[idx[k]]).sum::<f64>())
     };
     // Every feature contact is handed to the solver (a moving obstacle's too: answered only
-    // here, by position after the solve, the cloth it carries lagged a whole substep of its
-    // motion behind it every substep, and that push was a strain the solver never saw).
+    // here, by position after the solve, the cloth it carries would lag a whole substep of its
+    // motion behind it every substep, and that push would be a strain the solver never sees).
     let moving = o.pose_prev != o.pose;
     contacts.push(FeatureContact {
         verts: hit.verts,
@@ -86,7 +86,7 @@ pub(super) fn respond(
     // diagonal), and distributing each contact's impulse over its vertices in turn over-corrects
     // the shared vertex, which leaves the step moving away from the feature while its
     // neighbours still approach it. That velocity, undone by the next step's push, never
-    // decays (measured: 0.2-0.5 m/s at rest). Removing each moving vertex's own approaching
+    // decays, even at rest. Removing each moving vertex's own approaching
     // velocity is idempotent (a second contact with the same normal changes nothing), leaves
     // `c` not approaching, and is exact Coulomb friction per vertex.
     for k in 0..3 {

@@ -191,13 +191,13 @@ fn ee_hit(p: [[Vec3; 2]; 2], q: [[Vec3; 2]; 2], t: f64, min_gap: f64) -> EeHit {
     // Closest at an end of either edge, the contact is that end point's with the other
     // segment: its separation is the normal wherever it is meaningful (over half the gap). The
     // plane normal of the two edges is not: a cloth column draped over a rod axis at one
-    // vertex got opposite normals from its two edges there, and the feature passes pushed that
-    // vertex 7.6 cm back and forth within a substep however short (drape_bot's forearm lifting
-    // a towel at its velocity limit: 3.9x rest, then 1060 m/s); a cloth edge 8 mm above a box
-    // corner (the end of a box edge), its plane normal with that edge nearly horizontal, read
-    // a 1 mm gap along it and was pushed 7 mm sideways every substep (a cloth resting on
-    // drape_bot's palm, 1.33x rest). Where the closest points lie inside both edges the two
-    // normals agree.
+    // vertex gets opposite normals from its two edges there, and the feature passes would push
+    // that vertex centimetres back and forth within a substep however short, until it blows up
+    // (drape_bot's forearm lifting a towel at its velocity limit); a cloth edge millimetres
+    // above a box corner (the end of a box edge), its plane normal with that edge nearly
+    // horizontal, reads a far smaller gap along it and would be pushed sideways every substep
+    // (a cloth resting on drape_bot's palm). Where the closest points lie inside both edges the
+    // two normals agree.
     let min_gap = if s <= 0.0 || s >= 1.0 || u <= 0.0 || u >= 1.0 {
         0.5 * min_gap
     } else {

@@ -9,8 +9,8 @@ use parry3d::query::{PointProjection, Ray};
 
 /// Depth (m) below which a vertex lies on a solid's surface, not inside it: cloth laid exactly on
 /// a face (robot_cape's hem on drape_bot's base box, z = 0.4 - 0.3 against 0.05 + 0.05) lands a
-/// rounding error on either side, and every run of that scene warned of 5 vertices inside at
-/// "0.0 mm" and planned their way out. A micrometre: above the rounding of parry's f32 shapes
+/// rounding error on either side, and would be reported inside at "0.0 mm" and led out on every
+/// run of that scene. A micrometre: above the rounding of parry's f32 shapes
 /// (cylinders, meshes: about 1e-7 m at a metre), far below any cloth's thickness.
 pub(crate) const ON_SURFACE: f64 = 1e-6;
 
@@ -155,8 +155,8 @@ impl Obstacle {
     /// outside a solid (or on its surface, within [`ON_SURFACE`]) but inside its contact layer of
     /// thickness `th`; `None` when clear, inside, or not a solid. On the surface counts: cloth
     /// laid along drape_bot's closed fingers lies on both faces where they meet, and read as in
-    /// neither layer, it was left to the vertex pass, which pushed it out of one finger through
-    /// the other, 8 mm across the cloth in one pass.
+    /// neither layer, it would be left to the vertex pass, which pushes it out of one finger
+    /// through the other, millimetres across the cloth in one pass.
     pub(crate) fn in_layer(&self, p: Vec3, th: f64) -> Option<(Vec3, f64)> {
         if matches!(self.geom, Geom::Surface) {
             return None;
@@ -194,7 +194,8 @@ impl Obstacle {
         let far = p + dir * (2.0 * reach + 1.0);
         // A ray from outside to a point inside crosses the surface; it is missed only by rounding
         // at a point on the surface (depth 0). Read as "no way out", such a vertex on drape_bot's
-        // forearm fell to the nearest-face push: 8 mm in one pass, 1.4x its edge.
+        // forearm would fall to the nearest-face push: millimetres in one pass, stretching its
+        // edges.
         Some(
             self.cast_local(far, p)
                 .map_or(0.0, |hit| (hit.point - p).dot(dir).max(0.0)),
@@ -343,9 +344,9 @@ mod tests {
 
     /// A point on a solid's surface up to rounding (inside by nanometres, which parry's f32 ray
     /// cannot resolve) has a way out of depth about 0, and is in the contact layer: cloth led out
-    /// of drape_bot's forearm fell to the nearest-face push when either read "none" (8 mm in one
-    /// pass), and cloth on the shared face of its closed fingers was pushed out of one through
-    /// the other.
+    /// of drape_bot's forearm falls to the nearest-face push when either reads "none"
+    /// (millimetres in one pass), and cloth on the shared face of its closed fingers is pushed
+    /// out of one through the other.
     #[test]
     fn a_point_on_the_surface_has_a_way_out_and_a_layer() {
         let obstacles = [

@@ -179,8 +179,8 @@ impl SelfCollider {
             return none;
         }
         // The impact is inelastic: the pair's approaching normal velocity goes, nothing more.
-        // Adding the position change over h instead (as before) turned a deep correction into
-        // speed: 14.5 m/s on robot_cape where the arms reverse (t = 1.5 s).
+        // Adding the position change over h instead would turn a deep correction into speed
+        // (metres per second on robot_cape where the arms reverse).
         let vn = n.dot(st.eval(v1));
         Correction {
             st: *st,

@@ -2,15 +2,15 @@
 //! the pass starts from, and each vertex moves by the mean of the moves its pairs ask of it,
 //! weighted by their lengths (Jacobi with averaging).
 //!
-//! Answered one after another (Gauss-Seidel), each pair saw its predecessors' corrections, so
-//! the outcome followed the pair order: on the 2x crumple, leaf order left an edge 1.86x its
-//! rest length, descending 1.81x, ascending 1.35x, and each order failed a different scene's
-//! bound (ascending: robot_pick_towel at 2x to 2.60x, from its repulsion pass alone).
+//! Answered one after another (Gauss-Seidel), each pair would see its predecessors'
+//! corrections, so the outcome would follow the pair order: on the 2x crumple the stretch
+//! differs widely between leaf, descending and ascending order, and each order fails a
+//! different scene's bound (ascending: robot_pick_towel at 2x, from its repulsion pass alone).
 //!
 //! Why weighted by length: a vertex over a layer is pushed by its own pair and, a little, by the
 //! pairs of the layer's vertices with the triangles around it (its barycentric share). Counted
-//! alike (a plain mean), those small moves diluted its own: two springless sheets dropped on each
-//! other rested 2.5 mm into a 6 mm contact distance. Weighted by length, the pairs that hold a
+//! alike (a plain mean), those small moves dilute its own: two springless sheets dropped on each
+//! other rest well inside their contact distance. Weighted by length, the pairs that hold a
 //! vertex decide; equal moves still give their mean (no overshoot when k pairs push one way), and
 //! two opposite moves give their sum (a vertex squeezed between layers).
 

@@ -12,7 +12,7 @@
 //! Repulsion and CCD passes are Jacobi: every pair's correction is computed from the state the
 //! pass starts in, and each vertex moves by the length-weighted mean of its pairs' moves
 //! (`jacobi`), so the outcome does not depend on the order the broad phase lists pairs in (in
-//! order, Gauss-Seidel, the pick towel at twice its resolution reached 2.60x rest on one order).
+//! order, Gauss-Seidel, the pick towel at twice its resolution overstretches on some orders).
 //!
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
 //! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no

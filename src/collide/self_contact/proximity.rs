@@ -18,16 +18,17 @@ const OUTSIDE_CONE_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// Largest push of one repulsion, in rest edge lengths: the strain one correction hands the next
 /// solve, as fast contact (`sim/fast.rs`) lets an obstacle move a third of a spacing per substep.
-/// A full projection pushed a vertex found 3.8 mm inside a 16 mm contact distance by 12 mm at
-/// once and its edge to 1.74x rest (robot_pick_towel as the towel lands, t = 2.65 s); capped at
-/// a third, 1.37x (a half: 1.55; a quarter: the 2x crumple 1.52).
+/// A full projection pushes a vertex found deep inside the contact distance out at once, by
+/// most of a spacing, and stretches its edges with it (robot_pick_towel as the towel lands); a
+/// third keeps that stretch moderate, where a half does not and a quarter leaves too much to
+/// the later passes (the 2x crumple stretches more).
 const PUSH_CAP: f64 = 1.0 / 3.0;
 
 /// A pair within this fraction of its contact distance counts as settled: the passes stop when
 /// every pair is. A mean of a vertex's corrections (`jacobi`) closes only part of each pair's
 /// deficit where pairs that hardly move the vertex share in it (a vertex over a layer is pushed
 /// by its own pair and, a little, by the layer's vertices' pairs with its triangles): one pass
-/// left two sheets dropped on each other 2.5 mm into a 6 mm contact distance.
+/// leaves two sheets dropped on each other well inside their contact distance.
 pub(super) const SETTLED: f64 = 1e-2;
 
 /// One parallel part of [`SelfCollider::near_answers`]: its tested count, answers and (on a
@@ -45,9 +46,8 @@ impl SelfCollider {
     /// vertex (`changed`); returns the pairs still short of their contact distance by more
     /// than [`SETTLED`] of it on end positions.
     /// `with_edges`: edge-edge pairs too (without CCD behind it); with CCD the vertex-triangle
-    /// pairs keep the layers apart and CCD answers edges that cross, at half the cost
-    /// (robot_pick_towel: the collision stage 11.1 s -> 5.1 s over 4 s simulated, still no
-    /// self-intersection).
+    /// pairs keep the layers apart and CCD answers edges that cross, at about half the
+    /// collision stage's cost (robot_pick_towel, still without self-intersection).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn repulsion_pass(
         &mut self,
@@ -168,13 +168,14 @@ impl SelfCollider {
     /// (`RestShape::near_vt`) that `anew` keeps, whose boxes overlap at the last proximity
     /// refit and that lie across no seam being sewn, into `out` in (vertex, triangle) order;
     /// returns how many were tested. Read from the rest lists in parallel over vertices: a
-    /// 64x64 crumple has 86 k such pairs and tests 27 k, nearly all a flat sheet one ring or
-    /// two beyond its contact distance, where listing and sorting them cost as much as testing.
+    /// crumpling sheet tests a good part of its near pairs, nearly all of them a flat sheet one
+    /// ring or two beyond its contact distance, where listing and sorting them would cost as
+    /// much as testing.
     ///
     /// The pairs whose boxes overlap are kept in `kept` (valid until the next refit,
     /// `near_kept_valid`; returned with the count), and the step's later passes, on the same
-    /// boxes, read those instead of the lists: the towel of `robot_towel.yaml` at 64x64 walks
-    /// about 200 k near pairs a pass of which about 10 k overlap.
+    /// boxes, read those instead of the lists: on a towel (`robot_towel.yaml` at 64x64) only a
+    /// small share of the near pairs a walk visits overlap.
     fn near_answers(
         &self,
         test: impl Fn(u32, u32) -> Option<Correction> + Sync,
@@ -246,11 +247,11 @@ impl SelfCollider {
     /// two layers, and act along the face's normal: when the vertex is within the contact
     /// distance of the triangle's plane and projects inside the triangle (to within that
     /// distance; Bridson et al. 2002, sec. 4), or lies beyond its boundary within 45 degrees of
-    /// the normal. The closest point's direction there is radial about the boundary: on the
-    /// flag at twice its resolution the two ends of one edge, pressed from either side onto a
-    /// crease of the other layer, were pushed apart along such normals 4-5 mm a substep until
-    /// the edge was 1.74x its rest length (1.34x along the face normals). A vertex beside the
-    /// boundary, in the triangle's plane, is the neighbouring face's or CCD's.
+    /// the normal. The closest point's direction there is radial about the boundary: the two
+    /// ends of one edge, pressed from either side onto a crease of the other layer (the flag at
+    /// twice its resolution), would be pushed apart along such normals by millimetres a substep,
+    /// stretching the edge far more than along the face normals. A vertex beside the boundary,
+    /// in the triangle's plane, is the neighbouring face's or CCD's.
     fn vt_close(
         &self,
         a: u32,
@@ -333,10 +334,11 @@ impl SelfCollider {
             // that holds two layers `gap` apart is at least pi/2 gap long), or one edge apart
             // (the triangle touches the vertex's 1-ring: no vertex between them to fold at), so
             // their closeness is the sheet squeezed in its own plane, which the in-surface
-            // direction of the closest point undoes. The face normal there pushed the vertex
-            // out of its own sheet: through the sheet under it in `tests/collide_self.rs`, to
-            // 150 m/s in the gripper of robot_pick_towel. Skipping these pairs let the 2x
-            // crumple stretch to 1.67. Nor is such a pair held farther apart than it is at rest.
+            // direction of the closest point undoes. The face normal there would push the
+            // vertex out of its own sheet: through the sheet under it in
+            // `tests/collide_self.rs`, to a blow-up in the gripper of robot_pick_towel. Skipping
+            // these pairs would let the 2x crumple overstretch. Nor is such a pair held farther
+            // apart than it is at rest.
             let gap = st.gap(th).min(rest_d);
             return radial(p - q, st.eval(x0), gap).map(|n| Close::across(st, n, gap));
         }
@@ -380,9 +382,9 @@ impl SelfCollider {
         };
         let gap = st.gap(th);
         // Within the contact distance of the plane but not of the triangle: the tolerance above
-        // assumes a thickness small against the triangle, and at 128x128 crumple (6 mm on a
-        // 6.3 mm spacing, `tol` 1.35) it answered 6.8 k such pairs a step, pushing layers
-        // apart beyond their contact distance.
+        // assumes a thickness small against the triangle, and with a thickness near the spacing
+        // (128x128 crumple: 6 mm on a 6.3 mm spacing, `tol` 1.35) it would answer thousands of
+        // such pairs a step, pushing layers apart beyond their contact distance.
         if (p - q).length_squared() >= gap * gap {
             return None;
         }

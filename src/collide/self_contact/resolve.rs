@@ -11,11 +11,11 @@ use crate::Vec3;
 const CONTACT_MASS_FACTOR: f64 = 10.0;
 
 /// Repulsion passes on the first substep (continuous mode), each on the first one's candidates
-/// (those with a changed vertex), until every pair is settled. One pass left a springless layer
-/// resting inside its contact distance (`tests/collide_self.rs`); eight (with a plain mean)
-/// stretched the flag's edges to 1.53x rest and the 2x crumple's to 1.60x, where three
-/// (weighted mean) hold 1.3 and 1.3. Answering only the pairs the first pass found close
-/// stretched the 2x crumple to 1.63x rest (CCD hits 0 -> 209).
+/// (those with a changed vertex), until every pair is settled. One pass leaves a springless
+/// layer resting inside its contact distance (`tests/collide_self.rs`); many passes stretch the
+/// flag's and the 2x crumple's edges, where three (with the weighted mean of `jacobi`) hold
+/// them. Answering only the pairs the first pass found close would overstretch the 2x crumple
+/// and leave crossings to CCD.
 const REPULSION_PASSES: usize = 3;
 
 pub(crate) struct SelfOutcome {

@@ -27,12 +27,12 @@ impl Stencil {
     ///
     /// The minimal-energy distribution moves vertex k by `c_k w_k / M` times `d`: among free
     /// vertices that follows their masses, but where kinematic vertices carry most of both sides'
-    /// weight, the free vertex of small weight `c` is thrown `d / c`. On robot_cape at 48x48 a
-    /// vertex beside the attached edge, 0.4 % of a triangle whose other corners were attached
-    /// (and met by an attached vertex), was thrown 3 m at 481 m/s by one CCD correction. So the
-    /// change is scaled by the free share of the freer side (1 when either side is all free,
-    /// which leaves every such pair's arithmetic as it was): the free vertices move as far as a
-    /// free side would. What that leaves of the pair is mostly the scene's motion, and is the
+    /// weight, the free vertex of small weight `c` is thrown `d / c`: on robot_cape at 48x48 a
+    /// vertex beside the attached edge, a small share of a triangle whose other corners are
+    /// attached (and met by an attached vertex), would be thrown metres by one CCD correction.
+    /// So the change is scaled by the free share of the freer side (1 when either side is all
+    /// free, which leaves every such pair's arithmetic unscaled): the free vertices move as far
+    /// as a free side would. What that leaves of the pair is mostly the scene's motion, and is the
     /// next pass's and the impact zones' (which move with kinematic vertices rigidly).
     pub fn moves(&self, w: &[f64], d: Vec3) -> Option<[Vec3; 4]> {
         let m = self.inv_mass(w);

@@ -2,10 +2,11 @@
 //! a face normal, kept while the vertex stays over the face, for the solver to hold apart in
 //! the next substep (`sim/coupling.rs`) as it holds the cloth against obstacles.
 //!
-//! Why: the solve knew nothing of cloth-cloth contact, so each substep it moved a vertex resting
-//! on a lower layer as far into it as its falling neighbours pulled it (11 mm a substep on the
-//! crumple at twice its resolution), and the repulsion pushed that vertex alone back out: its
-//! edges went to 1.4-1.5x rest for substeps running, while the solve held them at 1.03.
+//! Why: without them the solve knows nothing of cloth-cloth contact, so each substep it moves a
+//! vertex resting on a lower layer as far into it as its falling neighbours pull it (most of a
+//! spacing a substep on the crumple at twice its resolution), and the repulsion pushes that
+//! vertex alone back out: its edges stay stretched for substeps running, far beyond what the
+//! solve holds them at.
 
 use crate::collide::narrow;
 use crate::Vec3;

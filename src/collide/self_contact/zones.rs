@@ -155,9 +155,9 @@ impl SelfCollider {
             if !kinematic.is_empty() {
                 // Kinematic members have infinite mass: the zone moves rigidly with them, by the
                 // rigid motion that best fits their velocities (exact when they share one link or
-                // pin). Translating it with their mean velocity, as before, ignored the link's
-                // rotation and stretched the edges into the zone (robot_cape: 9.6x rest and
-                // 26 m/s where the shoulder's attached corner met the torso's).
+                // pin). Translating it with their mean velocity would ignore the link's rotation
+                // and stretch the edges into the zone (robot_cape, where the shoulder's attached
+                // corner meets the torso's).
                 let (vc, omega, xc) = rigid_fit(kinematic.iter().map(|&i| (x0[i], vel(i), 1.0)));
                 for &i in members {
                     let i = i as usize;

@@ -8,9 +8,9 @@ use crate::linalg::Filter;
 /// the one right after the last full build by a quarter (plus two).
 pub(super) const REBUILD_EVERY: u32 = 50;
 
-/// Cost of a rebuild along the kept aggregates (new values only), in PCG iterations (measured
-/// about two at 64x64). A swinging towel's coarse levels go stale within a few substeps
-/// (measured 20, 23, 27, 31 iterations at ages 0 to 3); such a rebuild brings the count back.
+/// Cost of a rebuild along the kept aggregates (new values only), in PCG iterations: about two
+/// at 64x64. A swinging towel's coarse levels go stale within a few substeps (each substep
+/// adds a few iterations to its solve); such a rebuild brings the count back.
 pub(super) const REFRESH_COST: u32 = 2;
 
 /// Which build's iteration count the next step's first solve measures.
@@ -28,11 +28,11 @@ pub(super) enum Pending {
 ///
 /// Its iteration counts are those of a step's first solve only: the refits' and Newton's
 /// solves start from the step's answer or solve for a correction and take a few iterations
-/// whatever the hierarchy. Taken from any solve, the count after a full build was often a
-/// refit's (1-4 iterations), so the next step's first solve (40-50) read as drift and asked for
-/// another full build: S1 64x64 (`benches/contact.rs`) built its hierarchy afresh 71 times in
-/// 2 s, 13 times now; the 20 m/s rod of `benches/fast_links.rs` 10 times in 38 solves, 6 now
-/// (the rest come from a split substep's count, smaller for its shorter step, taken as the
+/// whatever the hierarchy. Taken from any solve, the count after a full build would often be
+/// a refit's (a few iterations), so the next step's first solve (tens) would read as drift and
+/// ask for another full build, several times as many as needed on S1 64x64
+/// (`benches/contact.rs`) and the 20 m/s rod of `benches/fast_links.rs` (whose remaining full
+/// builds come from a split substep's count, smaller for its shorter step, taken as the
 /// baseline of a full one).
 pub(super) struct Hierarchy {
     pub(super) mg: Multigrid,
@@ -57,11 +57,11 @@ impl Hierarchy {
     /// Whether a step's filter differs from the one the coarse levels were built with: then
     /// the step's first solve gets coarse levels rebuilt along the kept aggregates. Contacts
     /// change the filter every step (held vertices come and go, normals turn as the cloth
-    /// slides), and the smoothed prolongator of the old filter's operator preconditioned the
-    /// new one poorly: on S1 64x64 (a cloth resting on a sphere, ~870 held vertices) the
-    /// first solve of a step took 77 iterations on the last step's coarse levels and 45 on
-    /// rebuilt ones, while a rebuild costs about `REFRESH_COST` iterations. A filter that does
-    /// not change (pins only, no contact) keeps the iteration-count schedule above.
+    /// slides), and the smoothed prolongator of the old filter's operator preconditions the
+    /// new one poorly: on S1 64x64 (a cloth resting on a sphere, hundreds of held vertices)
+    /// the first solve of a step takes far more iterations on the last step's coarse levels
+    /// than on rebuilt ones, while a rebuild costs about `REFRESH_COST` iterations. A filter
+    /// that does not change (pins only, no contact) keeps the iteration-count schedule above.
     pub(super) fn filter_changed(&self, filter: &[Filter]) -> bool {
         self.filter.as_slice() != filter
     }

@@ -47,9 +47,9 @@ impl EnergyCheck {
 /// The largest stretch over rest length a linearisation at `x0` does not see at `x1`, over the
 /// effects' springs ([`crate::effects::Effect::unseen_stretch`]); Newton iterations follow while
 /// it exceeds `ImplicitSettings::linearisation_tolerance`. The energy check is global: one edge
-/// turned across the skirt's flapping border stretched to 1.27x rest in one solve of a cloth
-/// landing on a ball (S1 64x64, `cargo bench --bench contact`) while the landing's dissipation
-/// elsewhere kept the sum negative.
+/// turned across the skirt's flapping border of a cloth landing on a ball (S1 64x64, `cargo
+/// bench --bench contact`) can stretch far in one solve while the landing's dissipation
+/// elsewhere keeps the sum negative.
 pub(super) fn unseen_stretch(d: &Dynamics, x0: &[Vec3], x1: &[Vec3]) -> f64 {
     d.effects
         .iter()
@@ -129,9 +129,9 @@ mod tests {
     use crate::effects::EffectSet;
     use crate::integrate::{ImplicitSettings, Integrator, StepReport};
     use crate::linalg::Filter;
-    /// A stiff spring swinging about a pinned end (issue 7's root cause in one spring): at rest
-    /// length the linearisation has no transverse stiffness, so one Baraff-Witkin solve moves the
-    /// free end along the tangent by `v h` and stretches the spring by
+    /// A stiff spring swinging about a pinned end (a stiff cloth's energy gain in one spring): at
+    /// rest length the linearisation has no transverse stiffness, so one Baraff-Witkin solve moves
+    /// the free end along the tangent by `v h` and stretches the spring by
     /// `sqrt(l^2 + (v h)^2) - l` = 7 mm, i.e. `k e^2 / 2` = 26 J out of 25 uJ of kinetic energy.
     /// The Newton iterations must bring it back onto (about) the circle without creating energy.
     #[test]

@@ -20,10 +20,10 @@ pub(super) enum SolveKind {
     /// matrix changed in the rows the round refitted.
     Round,
     /// A Newton correction, from zero, on the matrix assembled at the iterate: its coarse
-    /// levels are rebuilt along the kept aggregates. On the step's own (at its start state),
-    /// the corrections of S1 64x64's landing (`cargo bench --bench contact`: stiff springs
-    /// turned by the impact, nine steps) took 64-146 iterations to 1e-5, 225 ms of the run;
-    /// on rebuilt ones 11-33 (a rebuild costs about ten).
+    /// levels are rebuilt along the kept aggregates. The step's own coarse levels (at its start
+    /// state) precondition the iterate's matrix poorly where the impact turned stiff springs
+    /// (S1 64x64's landing, `cargo bench --bench contact`): rebuilt ones take several times
+    /// fewer iterations, which saves far more than the rebuild costs.
     Newton,
 }
 
@@ -33,16 +33,13 @@ impl Implicit {
     /// no preconditioner update, and the rebuild schedule counts only solves that iterate.
     ///
     /// A split or subdivided step (`short_step`) keeps the last full step's aggregates (see
-    /// [`Self::update_hierarchy`]) and stays out of the rebuild schedule. Aggregated afresh,
-    /// a short step's mass-dominated matrix coarsened poorly (the 20 m/s rod's split substeps:
-    /// levels of 1600, 310, 221 rows, the 221-row level ~77 blocks a row against the finest's
-    /// ~9, 7-15 ms a build against 1.3-1.6 ms at a full substep), and its smaller iteration
-    /// count, taken as the schedule's baseline, made the next full step's read as drift. The
-    /// rod (`cargo bench --bench fast_links`): 20.5-21.0 -> 15.2-15.7 ms per frame, 10.5-11.0
-    /// -> 8.2 times its cost at rest. Block Jacobi for short steps took it to 15-16
-    /// ms but S1 64x64, whose splits land the cloth on the ball, from 108 to 247 CG iterations
-    /// per frame (171 for quarter steps and shorter); the last full step's coarse levels as
-    /// they were, 81 ms.
+    /// [`Self::update_hierarchy`]) and stays out of the rebuild schedule. Aggregated afresh, a
+    /// short step's mass-dominated matrix coarsens poorly (few, dense coarse levels, each build
+    /// several times a full substep's), and its smaller iteration count, taken as the
+    /// schedule's baseline, makes the next full step's read as drift. Block Jacobi for short
+    /// steps would be as cheap on the 20 m/s rod of `cargo bench --bench fast_links`, but more
+    /// than doubles the CG iterations of S1 64x64 (`cargo bench --bench contact`), whose splits
+    /// land the cloth on the ball.
     pub(super) fn solve(&mut self, filt: &[Filter], kind: SolveKind, tol: f64) -> SolveStats {
         let max_it = self.settings.cg_max_iterations;
         let short = self.short_step;

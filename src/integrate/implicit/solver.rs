@@ -145,9 +145,9 @@ impl Integrator for Implicit {
 
     /// Runs the step on the caller's thread; its products, filter pass, Galerkin products and
     /// sweeps fork on [`crate::par`]'s spinning helper. On rayon's pool (the step inside a
-    /// `rayon::scope`) the forks woke sleeping workers, dozens of times per PCG iteration: at
-    /// 64x64 two threads solved no faster than one (S1's CG 38.5 and 38.8 ms a frame), and 0.73x
-    /// of that on the helper.
+    /// `rayon::scope`) every fork wakes a sleeping worker, dozens of times per PCG iteration,
+    /// which at 64x64 costs what the second thread gains; the spinning helper is awake already
+    /// (`cargo bench --bench contact` measures the CG time per frame).
     fn step(
         &mut self,
         d: &Dynamics,

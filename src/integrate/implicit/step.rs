@@ -21,13 +21,12 @@ const MAX_REFITS: u32 = 2;
 /// (`cg_tolerance`) from there and gets the same rounds again (at most `MAX_REFITS` more
 /// solves), so it ends as settled as when every round was tight, from active sets that mostly
 /// settled already. Each change of an active set moves the answer by more than the last
-/// decades of a tight solve, which the next round threw away: S1 64x64 (a cloth dropped on a
-/// sphere with friction, `cargo bench --bench contact`) solved three times a step to 1e-5 once
-/// it rested, 48 + 33 + 20 iterations, 115 a frame over the run; 77 now. With only one round
-/// after the tight solve (72 a frame) a round decided on a loose answer could be final: a
-/// cape's hem led out of drape_bot's base (48 x 52) reached 1.345x rest (1.195 before; 1.198
-/// now), drape_bot's frictionless towel in `tests/fast_robot.rs`, without any round after it,
-/// 1.172 against its bound 1.157 (1.151 before and now).
+/// decades of a tight solve, which the next round would throw away: a cloth resting on a
+/// sphere with friction (S1 64x64, `cargo bench --bench contact`) would be solved to the
+/// scene's tolerance three times a step. The rounds after the tight solve stay: with only one,
+/// or none, a round decided on a loose answer could be final, and a hem led out of an
+/// obstacle (`tests/start_inside.rs`) or the frictionless towel of `tests/fast_robot.rs`
+/// stretches past its bound.
 const ACTIVE_SET_TOLERANCE: f64 = 1e-2;
 
 /// A step shorter than this share of the scene's substep is a split or subdivided one (halves,

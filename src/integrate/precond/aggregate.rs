@@ -16,9 +16,9 @@ pub(super) const ISOLATED: u32 = u32::MAX;
 ///
 /// A row with no strong connection ([`ISOLATED`]: its diagonal dominates, e.g. a vertex held by
 /// a sticking friction drag, `mu N / STICK_SPEED` per m/s) is in no aggregate: the smoother
-/// solves it, and the coarse levels leave it out. As singleton aggregates such rows stalled the
-/// coarsening (S1 64x64 with friction 5: 4096 -> ~1050 -> ~440 rows, the last ~200 blocks a row
-/// after smoothing the prolongator, 80-100 ms a frame at rest).
+/// solves it, and the coarse levels leave it out. As singleton aggregates such rows would stall
+/// the coarsening (S1 64x64 with friction 5 at rest: coarse levels a quarter of the fine one
+/// and more, dense after smoothing the prolongator, and slow to build).
 pub(super) fn aggregate(a: &Csr, diag: &[M3]) -> (Vec<u32>, usize) {
     let n = a.rows();
     let dnorm: Vec<f32> = diag.iter().map(|d| frob2(d).sqrt()).collect();

@@ -147,9 +147,9 @@ impl Multigrid {
         }
         // A dense factor where coarsening reached its target, or stalled below a coarse level.
         // Not when it stalled at the finest level: there the matrix has no strong connections
-        // (mass-dominated, a small step), so sweeps already solve it, and a factor of up to
-        // DENSE_MAX_ROWS blocks refactored at every rebuild cost ~95x the step (the study's
-        // 16x16 sheet at dt 1/7680: 17 ms per step, 55 % in this factor, at 1.4 iterations).
+        // (mass-dominated, a small step), so sweeps already solve it in an iteration or two,
+        // and a factor of up to DENSE_MAX_ROWS blocks refactored at every rebuild would cost
+        // many times the step (the study's 16x16 sheet at its smallest steps).
         let last = levels.last().map_or(0, |l| l.a.rows());
         let dense = if last <= COARSEST_ROWS || (levels.len() > 1 && last <= DENSE_MAX_ROWS) {
             Some(Dense::factor(&levels[levels.len() - 1].a)?)

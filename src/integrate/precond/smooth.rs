@@ -9,8 +9,8 @@ use glam::{Mat3A as M3, Vec3A as V3};
 /// Levels with this many rows or more smooth their two halves in parallel (hybrid Gauss-Seidel:
 /// Gauss-Seidel within each half, Jacobi across the cut). The split depends on the size only, so
 /// results do not depend on the number of threads. A 64x64 cloth's first coarse level (~700
-/// rows, ~13k blocks) is above it: split, S1 64x64 took 6 % more iterations at 0.88x the time
-/// each (`cargo bench --bench contact`).
+/// rows, ~13k blocks) is above it: split, it takes a few more iterations, each enough cheaper
+/// to gain overall (`cargo bench --bench contact`, S1 64x64).
 const PAR_SWEEP_ROWS: usize = 512;
 
 /// Rows `..mid` and `mid..` of a level, smoothed independently: the pre-smoother is forward

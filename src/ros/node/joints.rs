@@ -40,8 +40,8 @@ pub struct JointGate {
     /// robot cannot have reached within a step (a sparse or jumping `/joint_states`) otherwise
     /// drives its links through the cloth at many times their speed: drape_bot's shoulder
     /// jumping 0.3 rad in one 1/60 s step moves the gripper at 9 m/s, where its 2 rad/s limit
-    /// allows about 1, and the 64x64 towel with self-collision came out of the third such jump
-    /// with 218 intersecting triangle pairs and an edge 11.8x its rest length.
+    /// allows about 1, and a few such jumps leave the 64x64 towel with self-collision with
+    /// intersecting layers and edges many times their rest length.
     pub velocity_limits: bool,
     /// The last accepted command (the pose a reset blends back to).
     pub commanded: Option<JointPositions>,

@@ -83,10 +83,10 @@ pub struct QualityBounds {
     pub min_substeps: u32,
     pub max_cg_tolerance: f64,
     pub min_cg_max_iterations: u32,
-    /// The loosest linearisation tolerance: with the scene's default (0.1) the towel dragged by
-    /// drape_bot's gripper with self-collision (`cargo bench --bench node_latency`) took 15.5 and
-    /// 18.7 ms a step at the lowest rung against 14.5 with the check off, and fell short of real
-    /// time (0.84-0.96).
+    /// The loosest linearisation tolerance: with the scene's default (0.1) the Newton iterations
+    /// it asks for make the towel dragged by drape_bot's gripper with self-collision slower
+    /// than real time even at the lowest rung (`cargo bench --bench node_latency`, the
+    /// self-collision row), so the lower rungs loosen it up to this bound.
     pub max_linearisation_tolerance: f64,
     /// Rungs from the scene's quality to the bounds, both included (at least 2).
     pub levels: u32,
