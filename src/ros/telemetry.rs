@@ -54,6 +54,7 @@ pub struct FrameQuality {
 impl FrameQuality {
     /// Adds one step's metrics.
     pub fn add_step(&mut self, m: &StepMetrics) {
+        self.sim_time = m.time;
         self.steps += 1;
         self.substeps += u64::from(m.substeps);
         self.subdivisions += u64::from(m.subdivisions);
@@ -74,6 +75,33 @@ impl FrameQuality {
             *self.strain_limited.get_or_insert(0) += u64::from(n);
         }
         self.strain_limit_excess = self.strain_limit_excess.max(m.strain_limit_excess);
+    }
+
+    /// The next window's start: no steps yet, the state values (time, contacts, vertices on
+    /// their way out, self-intersections, energies, edge stretch) kept until a step replaces
+    /// them.
+    pub fn next_window(&self) -> FrameQuality {
+        FrameQuality {
+            sim_time: self.sim_time,
+            contacts: self.contacts,
+            exiting_vertices: self.exiting_vertices,
+            self_intersections: self.self_intersections,
+            kinetic_energy: self.kinetic_energy,
+            potential_energy: self.potential_energy,
+            ..FrameQuality::default()
+        }
+    }
+
+    /// The window's values on `/diagnostics`, one per row of [`METRICS`] that has one.
+    pub fn values(&self) -> Vec<KeyValue> {
+        (METRICS.iter())
+            .filter_map(|(key, value)| {
+                value(self).map(|value| KeyValue {
+                    key: key.to_string(),
+                    value,
+                })
+            })
+            .collect()
     }
 
     /// Sets the frame's state values (time, edge stretch) from the cloth at the frame.
@@ -124,58 +152,12 @@ impl FrameQuality {
         } else {
             (DiagnosticStatus::OK, "ok".to_string())
         };
-        let kv = |k: &str, v: String| KeyValue {
-            key: k.to_string(),
-            value: v,
-        };
-        // Shortest round-trip decimals: a reader gets back the exact f64.
-        let mut values = vec![
-            kv("sim_time_s", self.sim_time.to_string()),
-            kv("steps", self.steps.to_string()),
-            kv("substeps", self.substeps.to_string()),
-            kv("subdivisions", self.subdivisions.to_string()),
-            kv("contact_splits", self.contact_splits.to_string()),
-            kv(
-                "contact_splits_refused",
-                self.contact_splits_refused.to_string(),
-            ),
-            kv("cg_iterations", self.cg_iterations.to_string()),
-            kv("cg_iterations_max", self.cg_iterations_max.to_string()),
-            kv("cg_residual_max", self.cg_residual_max.to_string()),
-            kv("contacts", self.contacts.to_string()),
-            kv("unresolved_contacts", self.unresolved_contacts.to_string()),
-            kv(
-                "deepest_penetration_m",
-                self.deepest_penetration.to_string(),
-            ),
-            kv("max_edge_stretch", self.max_edge_stretch.to_string()),
-            kv("kinetic_energy_j", self.kinetic_energy.to_string()),
-            kv("potential_energy_j", self.potential_energy.to_string()),
-            kv(
-                "energy_j",
-                (self.kinetic_energy + self.potential_energy).to_string(),
-            ),
-        ];
-        if let Some(n) = self.self_intersections {
-            values.push(kv("self_intersections", n.to_string()));
-        }
-        // Only where the scene limits strain: other bags keep their bytes.
-        if let Some(n) = self.strain_limited {
-            values.push(kv("strain_limited_edges", n.to_string()));
-            values.push(kv(
-                "strain_limit_excess",
-                self.strain_limit_excess.to_string(),
-            ));
-        }
-        // Only while there are any: bags of scenes that start clear keep their bytes.
-        if self.exiting_vertices > 0 {
-            values.push(kv("exiting_vertices", self.exiting_vertices.to_string()));
-        }
+        let mut values = self.values();
         if wall_time {
-            values.push(kv(
-                "step_wall_time_ms",
-                format!("{:.3}", self.wall_time_s * 1e3),
-            ));
+            values.push(KeyValue {
+                key: "step_wall_time_ms".into(),
+                value: format!("{:.3}", self.wall_time_s * 1e3),
+            });
         }
         DiagnosticArray {
             header: Header::new(stamp, ""),
@@ -189,6 +171,61 @@ impl FrameQuality {
         }
     }
 }
+
+/// A window's value of one metric on `/diagnostics` (`None`: not written for this window).
+type Value = fn(&FrameQuality) -> Option<String>;
+
+/// The simulation's metrics on `/diagnostics`, in order: each key with its value and format.
+/// The recorder's bags and the node both write these rows, so the same plots work on both; a
+/// new metric is a field of [`StepMetrics`] and [`FrameQuality`] and a row here. Numbers are
+/// written as their shortest round-trip decimals: a reader gets back the exact f64. Rows that
+/// only some scenes have are left out where they have nothing to say, so that other bags keep
+/// their bytes.
+pub const METRICS: &[(&str, Value)] = &[
+    ("sim_time_s", |q| Some(q.sim_time.to_string())),
+    ("steps", |q| Some(q.steps.to_string())),
+    ("substeps", |q| Some(q.substeps.to_string())),
+    ("subdivisions", |q| Some(q.subdivisions.to_string())),
+    ("contact_splits", |q| Some(q.contact_splits.to_string())),
+    ("contact_splits_refused", |q| {
+        Some(q.contact_splits_refused.to_string())
+    }),
+    ("cg_iterations", |q| Some(q.cg_iterations.to_string())),
+    ("cg_iterations_max", |q| {
+        Some(q.cg_iterations_max.to_string())
+    }),
+    ("cg_residual_max", |q| Some(q.cg_residual_max.to_string())),
+    ("contacts", |q| Some(q.contacts.to_string())),
+    ("unresolved_contacts", |q| {
+        Some(q.unresolved_contacts.to_string())
+    }),
+    ("deepest_penetration_m", |q| {
+        Some(q.deepest_penetration.to_string())
+    }),
+    ("max_edge_stretch", |q| Some(q.max_edge_stretch.to_string())),
+    ("kinetic_energy_j", |q| Some(q.kinetic_energy.to_string())),
+    ("potential_energy_j", |q| {
+        Some(q.potential_energy.to_string())
+    }),
+    ("energy_j", |q| {
+        Some((q.kinetic_energy + q.potential_energy).to_string())
+    }),
+    // Only where the scene counts them.
+    ("self_intersections", |q| {
+        q.self_intersections.map(|n| n.to_string())
+    }),
+    // Only where the scene limits strain.
+    ("strain_limited_edges", |q| {
+        q.strain_limited.map(|n| n.to_string())
+    }),
+    ("strain_limit_excess", |q| {
+        (q.strain_limited.is_some()).then(|| q.strain_limit_excess.to_string())
+    }),
+    // Only while there are any.
+    ("exiting_vertices", |q| {
+        (q.exiting_vertices > 0).then(|| q.exiting_vertices.to_string())
+    }),
+];
 
 /// Largest `|x_i - x_j| / |uv_i - uv_j| - 1` over the triangle edges (0 for no cloth); edges of
 /// zero rest length are skipped.

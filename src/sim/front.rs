@@ -5,22 +5,20 @@
 //! (the guard's strain bound, `sim/strain.rs`, has the same `2 v / c`). At the start of a
 //! substep that tension is not there yet: a spring at rest length has no transverse stiffness
 //! in the linearisation, so the solve moves the carried vertices and leaves their neighbours,
-//! and the edges between stretch by the whole drag. Fast contact then had to split substeps
-//! until the drag per substep was a third of a spacing (`sim/fast.rs`). Given the front's strain
-//! around the carried vertices, the springs there are linearised at that tension
+//! and the edges between stretch by the whole drag, which fast contact answers by splitting
+//! substeps until the drag per substep is a third of a spacing (`sim/fast.rs`). Given the
+//! front's strain around the carried vertices, the springs there are linearised at that tension
 //! ([`crate::effects::Effect::add_front_stiffness`]): the solve takes the neighbours along, the
 //! cloth stays within the same strain bound, and the link's cloth moves with it in fewer
-//! substeps (`benches/fast_links.rs`: the 20 m/s rod 7.3 -> 2.4 substeps a frame).
+//! substeps (`benches/fast_links.rs` counts them).
 //!
 //! The strain is the longitudinal front's `2 u / c`, an upper bound of what a transverse drag
 //! builds: the classical transverse impact on a string (Smith, McCrackin and Schiefer 1958,
-//! `u / c = sqrt(e (2 sqrt(e (1 + e)) - e))`) gives 5-8 times less at 5-20 m/s. Measured with
-//! that strain (and the rings its transverse wave crosses in a substep) the rod took 3.9
-//! substeps a frame (14-16x its cost at rest instead of 9.6-11.8x) and the issue sheet's 3 mm capsule
-//! at 5 m/s reached 1.21 times rest against 1.18 allowed. The bound over-couples where pins hold
-//! the cloth behind the link: a sheet pinned along its top row, dragged by a 3 mm capsule at
-//! 5 m/s, reached 1.68, and 1.27 without the front (its bound 1.26 is broken either way: issue
-//! 18's open pinned-sheet item).
+//! `u / c = sqrt(e (2 sqrt(e (1 + e)) - e))`) gives 5-8 times less at 5-20 m/s, but linearised
+//! at that smaller strain the solve again leaves the carried vertices' edges beyond the bound
+//! and fast contact splits more. The bound over-couples where pins hold the cloth behind the
+//! link (a sheet pinned along its top row and dragged by a thin capsule stretches beyond the
+//! impact bound with or without the front; `tests/fast_links.rs`).
 
 use super::fast::REACH_RINGS;
 use crate::cloth::Cloth;

@@ -8,6 +8,7 @@ use crate::ros::msg::{
     ColorRGBA, DiagnosticArray, DiagnosticStatus, Distro, Header, KeyValue, Marker, MarkerArray,
     Point, Pose, Time, Vector3,
 };
+use crate::ros::telemetry::FrameQuality;
 
 /// What one diagnostics message reports.
 #[derive(Debug, Clone)]
@@ -19,24 +20,15 @@ pub struct DiagnosticsInput<'a> {
     pub real_time_factor: Option<f64>,
     pub step_time_mean: f64,
     pub step_time_max: f64,
-    pub contacts: usize,
-    pub deepest_penetration: f64,
-    /// Cloth vertices still on their way out of an obstacle the cloth started inside.
-    pub exiting_vertices: usize,
-    /// Cloth-cloth pairs the collision fail-safe could not resolve, summed over the window.
-    pub unresolved_contacts: usize,
-    /// Intersecting triangle pairs at the last step, when the scene counts them.
-    pub self_intersections: Option<usize>,
-    /// Largest relative edge stretch over the window's steps (`Cloth::max_edge_stretch`, the
-    /// recordings' key): a state the guard kept at its deepest subdivision shows here.
-    pub max_edge_stretch: f64,
-    pub energy: f64,
+    /// The simulation's metrics over the window's steps, written as the recordings write them
+    /// ([`crate::ros::telemetry::METRICS`]); its `max_edge_stretch` is the largest over the
+    /// steps, so a state the guard kept at its deepest subdivision shows there.
+    pub sim: &'a FrameQuality,
     pub stats: &'a LoopStats,
     pub dropped_steps: u64,
     /// Joint states dropped during the window.
     pub new_drops: u64,
     pub new_divergences: u64,
-    pub sim_time: f64,
     /// The quality the loop runs at (adaptive or fixed).
     pub quality: QualityStatus,
 }
@@ -49,20 +41,21 @@ pub const SLOW_RTF: f64 = 0.9;
 /// real time cannot be held even at the lowest allowed quality, when slower than real
 /// time or when inputs were dropped, else OK (saying so when quality is reduced).
 pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
+    let q = d.sim;
     let (level, message) = if d.new_divergences > 0 {
         (
             DiagnosticStatus::ERROR,
             format!("{} divergence(s): cloth restored", d.new_divergences),
         )
-    } else if d.unresolved_contacts > 0 || d.self_intersections.is_some_and(|n| n > 0) {
+    } else if q.unresolved_contacts > 0 || q.self_intersections.is_some_and(|n| n > 0) {
         (
             DiagnosticStatus::WARN,
             format!(
                 "cloth tangled: {} self-intersecting triangle pair(s), {} cloth-cloth pair(s) \
                  the collision fail-safe could not resolve",
-                d.self_intersections
+                q.self_intersections
                     .map_or_else(|| "uncounted".into(), |n| n.to_string()),
-                d.unresolved_contacts
+                q.unresolved_contacts
             ),
         )
     } else if d.paused {
@@ -90,12 +83,12 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             DiagnosticStatus::WARN,
             format!("{} bad joint state(s) dropped", d.new_drops),
         )
-    } else if d.exiting_vertices > 0 {
+    } else if q.exiting_vertices > 0 {
         (
             DiagnosticStatus::WARN,
             format!(
                 "{} cloth vertices still on their way out of an obstacle they started inside",
-                d.exiting_vertices
+                q.exiting_vertices
             ),
         )
     } else if d.quality.level > 0 {
@@ -127,23 +120,11 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             format!("{:.3}", d.step_time_mean * 1e3),
         ),
         kv("step_time_max_ms", format!("{:.3}", d.step_time_max * 1e3)),
-        kv("sim_time_s", format!("{:.3}", d.sim_time)),
-        kv("contacts", d.contacts.to_string()),
-        kv(
-            "deepest_penetration_m",
-            format!("{:.6}", d.deepest_penetration),
-        ),
-        kv("exiting_vertices", d.exiting_vertices.to_string()),
-        kv("unresolved_contacts", d.unresolved_contacts.to_string()),
-        kv(
-            "self_intersections",
-            d.self_intersections
-                .map_or_else(|| "n/a".into(), |n| n.to_string()),
-        ),
-        kv("max_edge_stretch", format!("{:.4}", d.max_edge_stretch)),
-        kv("energy_j", format!("{:.6}", d.energy)),
+    ];
+    values.extend(q.values());
+    values.extend([
         kv("divergences", s.divergences.to_string()),
-        kv("steps", s.steps.to_string()),
+        kv("steps_total", s.steps.to_string()),
         kv("dropped_steps", d.dropped_steps.to_string()),
         kv("frames", s.frames.to_string()),
         kv("joint_states", s.joint_states.to_string()),
@@ -161,7 +142,7 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
             s.description_failures.to_string(),
         ),
         kv("resets", s.resets.to_string()),
-    ];
+    ]);
     values.extend(
         quality_values(&d.quality)
             .into_iter()
@@ -312,6 +293,12 @@ mod tests {
             cg_max_iterations: 200,
             linearisation_tolerance: 0.1,
         };
+        let base = FrameQuality {
+            sim_time: 1.0,
+            contacts: 3,
+            max_edge_stretch: 0.02,
+            ..FrameQuality::default()
+        };
         let mut d = DiagnosticsInput {
             name: "drape",
             stamp: Time::default(),
@@ -319,18 +306,11 @@ mod tests {
             real_time_factor: Some(1.0),
             step_time_mean: 0.001,
             step_time_max: 0.002,
-            contacts: 3,
-            deepest_penetration: 0.0,
-            exiting_vertices: 0,
-            unresolved_contacts: 0,
-            self_intersections: None,
-            max_edge_stretch: 0.02,
-            energy: 0.0,
+            sim: &base,
             stats: &stats,
             dropped_steps: 0,
             new_drops: 0,
             new_divergences: 0,
-            sim_time: 1.0,
             quality: crate::ros::node::QualityController::new(
                 full,
                 &crate::ros::node::QualityBounds::default(),
@@ -361,35 +341,40 @@ mod tests {
             .iter()
             .any(|kv| kv.key == "real_time_factor" && kv.value == "0.500"));
         d.real_time_factor = Some(1.0);
-        d.exiting_vertices = 40;
-        let s = &diagnostics(&d).status[0];
+        let mut sim = base.clone();
+        let with = |sim: &FrameQuality| {
+            diagnostics(&DiagnosticsInput { sim, ..d.clone() }).status[0].clone()
+        };
+        sim.exiting_vertices = 40;
+        let s = with(&sim);
         assert_eq!(s.level, DiagnosticStatus::WARN);
         assert!(s.message.contains("40 cloth vertices"), "{}", s.message);
         assert!(s
             .values
             .iter()
             .any(|kv| kv.key == "exiting_vertices" && kv.value == "40"));
-        d.exiting_vertices = 0;
-        d.self_intersections = Some(0);
-        assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::OK);
+        sim.exiting_vertices = 0;
+        sim.self_intersections = Some(0);
+        assert_eq!(with(&sim).level, DiagnosticStatus::OK);
         // A tangle: self-intersections, or pairs the fail-safe gave up on.
-        d.self_intersections = Some(218);
-        let s = &diagnostics(&d).status[0];
+        sim.self_intersections = Some(218);
+        let s = with(&sim);
         assert_eq!(s.level, DiagnosticStatus::WARN);
         assert!(s.message.contains("tangled: 218"), "{}", s.message);
-        d.self_intersections = None;
-        d.unresolved_contacts = 685;
-        let s = &diagnostics(&d).status[0];
+        sim.self_intersections = None;
+        sim.unresolved_contacts = 685;
+        let s = with(&sim);
         assert_eq!(s.level, DiagnosticStatus::WARN);
         assert!(s.message.contains("uncounted") && s.message.contains("685"));
         assert!(s
             .values
             .iter()
             .any(|kv| kv.key == "unresolved_contacts" && kv.value == "685"));
+        // The recordings' rows and formats: the exact value.
         assert!(s
             .values
             .iter()
-            .any(|kv| kv.key == "max_edge_stretch" && kv.value == "0.0200"));
+            .any(|kv| kv.key == "max_edge_stretch" && kv.value == "0.02"));
         d.new_divergences = 1;
         assert_eq!(diagnostics(&d).status[0].level, DiagnosticStatus::ERROR);
     }

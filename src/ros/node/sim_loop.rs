@@ -15,6 +15,7 @@ use crate::input::error_line;
 use crate::integrate::IntegratorKind;
 use crate::robot::{JointInput, JointSource, RobotDriver};
 use crate::ros::msg::{ColorRGBA, DiagnosticArray};
+use crate::ros::telemetry::FrameQuality;
 use crate::ros::{mesh_marker, point_cloud};
 use crate::scene::{Scene, SceneError};
 use crate::sim::Simulation;
@@ -36,10 +37,8 @@ struct Window {
     steps: u64,
     step_time_sum: f64,
     step_time_max: f64,
-    deepest_penetration: f64,
-    /// Cloth-cloth pairs the collision fail-safe could not resolve.
-    unresolved_contacts: usize,
-    max_edge_stretch: f64,
+    /// The simulation's metrics over the window's steps (the state values of the last one).
+    sim: FrameQuality,
     dropped_at_start: u64,
     divergences_at_start: u64,
 }
@@ -60,12 +59,6 @@ pub struct SimLoop {
     paused: bool,
     stats: LoopStats,
     window: Window,
-    contacts: usize,
-    /// Vertices still on their way out of an obstacle the cloth started inside (last step).
-    exiting: usize,
-    /// Intersecting triangle pairs at the last step, when the scene counts them.
-    self_intersections: Option<usize>,
-    energy: f64,
     /// Adaptive quality (fixed at the scene's when `cfg.quality` is `None`).
     quality: QualityController,
     /// A model of a step's wall time replacing the measured one (tests, benches).
@@ -121,10 +114,6 @@ impl SimLoop {
                 clock_start: now,
                 ..Window::default()
             },
-            contacts: 0,
-            exiting: 0,
-            self_intersections: None,
-            energy: 0.0,
             quality,
             step_cost: None,
             last_step_wall: 0.0,
@@ -322,14 +311,7 @@ impl SimLoop {
             d.advance(&mut self.sim, t_next);
         }
         let start = Instant::now();
-        let result = self.sim.step().map(|m| {
-            (
-                (m.contacts, m.exiting_vertices),
-                (m.unresolved_contacts, m.self_intersections),
-                m.deepest_penetration,
-                m.kinetic_energy + m.potential_energy,
-            )
-        });
+        let result = self.sim.step();
         let mut wall = start.elapsed().as_secs_f64();
         if let Some(cost) = &mut self.step_cost {
             wall = cost(&self.quality.quality());
@@ -340,14 +322,10 @@ impl SimLoop {
         self.window.step_time_sum += wall;
         self.window.step_time_max = self.window.step_time_max.max(wall);
         match result {
-            Ok(((contacts, exiting), (unresolved, intersections), depth, energy)) => {
-                (self.contacts, self.exiting) = (contacts, exiting);
-                self.self_intersections = intersections;
-                self.window.unresolved_contacts += unresolved;
-                self.window.max_edge_stretch =
-                    (self.window.max_edge_stretch).max(self.sim.cloth.max_edge_stretch());
-                self.energy = energy;
-                self.window.deepest_penetration = self.window.deepest_penetration.max(depth);
+            Ok(m) => {
+                let q = &mut self.window.sim;
+                q.add_step(&m);
+                q.max_edge_stretch = q.max_edge_stretch.max(self.sim.cloth.max_edge_stretch());
                 let dt = self.sim.settings.dt;
                 let decision = self.quality.update(wall, dt);
                 self.adapt(decision, out);
@@ -459,18 +437,11 @@ impl SimLoop {
                 0.0
             },
             step_time_max: w.step_time_max,
-            contacts: self.contacts,
-            deepest_penetration: w.deepest_penetration,
-            exiting_vertices: self.exiting,
-            unresolved_contacts: w.unresolved_contacts,
-            self_intersections: self.self_intersections,
-            max_edge_stretch: w.max_edge_stretch,
-            energy: self.energy,
+            sim: &w.sim,
             stats: &self.stats,
             dropped_steps: self.pacer.dropped_steps(),
             new_drops: self.stats.dropped.total() - w.dropped_at_start,
             new_divergences: self.stats.divergences - w.divergences_at_start,
-            sim_time: self.sim.time(),
             quality: self.quality.status(),
         })
     }
@@ -481,6 +452,7 @@ impl SimLoop {
             sim_start: self.sim.time(),
             dropped_at_start: self.stats.dropped.total(),
             divergences_at_start: self.stats.divergences,
+            sim: self.window.sim.next_window(),
             ..Window::default()
         };
     }

@@ -238,8 +238,7 @@ impl Book {
     /// the start-of-substep force underestimates the work of a driven vertex that stretches the
     /// cloth within the substep (a robot link jumping to a new joint state), so each driven
     /// vertex's work is bounded with the larger of its start and end forces (a bound for a force
-    /// that grows monotonically along the path; the trapezoid rule still fell ~20% short on the
-    /// robot towel). Wind forces stay start-of-substep. Only for unconditionally stable
+    /// that grows monotonically along the path, where the trapezoid rule is not). Wind forces stay start-of-substep. Only for unconditionally stable
     /// integrators: there a large end force is the input's doing, while in an explicit blow-up
     /// it would be the instability's and must not widen the allowance. `scratch` holds the end
     /// forces.
