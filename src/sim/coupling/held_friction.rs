@@ -55,3 +55,38 @@ pub(super) fn next_limits(
         *slot = (*normal, mu * l.max(0.0) * m / h);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn next_limits_are_mu_times_each_surfaces_pressing_force() {
+        let normals = HeldNormals::from_contacts([(Vec3::Z, Vec3::ZERO), (Vec3::X, Vec3::ZERO)]);
+        let mut slots = [(Vec3::ZERO, 0.0); 3];
+        // 0.02 m/s per unit mass into the table, a pull off the wall.
+        next_limits(&mut slots, &normals, [0.02, -0.01, 0.0], 0.5, 0.1, 0.01);
+        assert_eq!(slots[0], (Vec3::Z, 0.5 * 0.02 * 0.1 / 0.01));
+        assert_eq!(slots[1], (Vec3::X, 0.0));
+        assert_eq!(slots[2], (Vec3::ZERO, 0.0));
+    }
+
+    #[test]
+    fn held_friction_takes_the_lagged_limit_of_the_same_surface_else_the_pressing_force() {
+        let coupling = Coupling {
+            friction_limit: vec![[(Vec3::Z, 0.7), (Vec3::ZERO, 0.0), (Vec3::ZERO, 0.0)]],
+            ..Coupling::default()
+        };
+        let wall = Vec3::new(0.0, 1.0, 0.0);
+        let normals = HeldNormals::from_contacts([(Vec3::Z, Vec3::X), (wall, Vec3::ZERO)]);
+        let mut out = Vec::new();
+        let f = Vec3::new(0.0, -2.0, -1.0);
+        coupling.held_friction(0, &normals, 0.5, f, &mut out);
+        assert_eq!(out.len(), 2);
+        assert_eq!(
+            (out[0].vertex, out[0].limit, out[0].reference),
+            (0, 0.7, Vec3::X)
+        );
+        assert_eq!((out[1].limit, out[1].reference), (0.5 * 2.0, Vec3::ZERO));
+    }
+}

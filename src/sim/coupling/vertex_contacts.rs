@@ -196,3 +196,55 @@ fn pressing_normals(group: &[VertexContact], f: Vec3) -> Option<HeldNormals> {
     }
     Some(normals)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A still contact of vertex 0 against a surface with normal `normal`.
+    fn contact(normal: Vec3) -> VertexContact {
+        VertexContact {
+            vertex: 0,
+            normal: normal.normalize(),
+            surface: Vec3::ZERO,
+            obstacle: 0,
+            led_out: false,
+        }
+    }
+
+    #[test]
+    fn a_vertex_pressed_into_its_surface_is_held() {
+        let group = [contact(Vec3::Z)];
+        let normals = pressing_normals(&group, Vec3::new(0.3, 0.0, -1.0)).unwrap();
+        assert_eq!(normals.normals(), &[Vec3::Z]);
+    }
+
+    #[test]
+    fn a_vertex_pulled_off_its_only_surface_is_released() {
+        let group = [contact(Vec3::Z)];
+        assert!(pressing_normals(&group, Vec3::new(0.3, 0.0, 1.0)).is_none());
+    }
+
+    #[test]
+    fn a_wedge_takes_back_the_surface_the_held_one_drives_the_vertex_into() {
+        // A table, and a slanted face whose normal points into it. The force lifts the vertex
+        // off the table but presses it into the face, which alone would slide it down into
+        // the table: the table is held again.
+        let (table, face) = (Vec3::Z, Vec3::new(1.0, 0.0, -0.3));
+        let group = [contact(table), contact(face)];
+        let f = Vec3::new(-1.0, 0.0, 0.1);
+        assert!(f.dot(table) > 0.0 && f.dot(face) < 0.0);
+        let normals = pressing_normals(&group, f).unwrap();
+        assert_eq!(normals.normals().len(), 2);
+        assert_eq!(normals.normals()[0], table);
+    }
+
+    #[test]
+    fn a_surface_the_force_pulls_off_and_the_held_ones_do_not_drive_into_stays_released() {
+        // Two walls at a right angle: the force presses the vertex into one and pulls it off
+        // the other, which the first one's filtered force does not reach.
+        let group = [contact(Vec3::X), contact(Vec3::Z)];
+        let normals = pressing_normals(&group, Vec3::new(0.5, 0.0, -1.0)).unwrap();
+        assert_eq!(normals.normals(), &[Vec3::Z]);
+    }
+}
