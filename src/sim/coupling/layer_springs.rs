@@ -1,0 +1,95 @@
+//! Layers of cloth resting on each other: a vertex over a face of another layer is held apart
+//! from it inside the solve by a one-sided vertex-face spring, whose forces on the two sides are
+//! equal and opposite.
+
+use super::{Coupling, StartState};
+use crate::collide::CollisionStage;
+use crate::integrate::{Capabilities, ContactSpring};
+use crate::linalg::Filter;
+use crate::Vec3;
+
+/// `k h^2 / m` of a layer spring at its point's mass `m` and the scene's substep: a load of its
+/// own weight deflects it by `g h^2 / 100`, 0.03 mm at 60 Hz. As stiff as a static edge's
+/// ([`CONTACT_STIFFNESS`](super::edge_springs::CONTACT_STIFFNESS)), the springs take many more
+/// CG iterations to solve a cloth lying on itself (sphere_drape.yaml, a crumple), for about the
+/// same stretch.
+const LAYER_STIFFNESS: f64 = 100.0;
+
+/// A layer spring's rest length in contact distances: a little beyond the repulsion's, so that a
+/// pair the spring holds under a load of a few times its weight (`g h^2 / 50` a substep, 0.05
+/// mm at 60 Hz against a 10 mm distance) stays out of the repulsion's reach. At the contact
+/// distance itself, the repulsion would answer every resting pair every substep, and its
+/// averaged moves, which do not conserve momentum, take part of a towel's weight off the
+/// hammock under it (`tests/resting_layers.rs`).
+const LAYER_REST: f64 = 1.02;
+
+/// How much of its contact distance a layer spring may restore in one substep: a pair found
+/// deep gets the rest of the way over the next substeps, not as speed, `deficit / h`, at once.
+const RESTORE: f64 = 0.1;
+
+impl Coupling {
+    /// Layers of cloth resting on each other in the last collision pass (a vertex over a face of
+    /// another layer, [`crate::collide::SelfTouch`]) become one-sided springs of this substep
+    /// between the vertex and the face's point under it (`x_p - sum b_i x_i` along the face's
+    /// normal), when the integrator solves springs. The solve then carries a layer's support
+    /// into the cloth around the vertex, instead of moving the vertex into the layer for the
+    /// repulsion to push back alone, and the vertex's weight into the layer under it: the
+    /// spring's forces on its two sides are equal and opposite. A pair closer than its contact
+    /// distance is held where it is: pushed apart within the solve, the deficit would leave as
+    /// speed, `deficit / h`, where the repulsion moves positions only. Stiffness
+    /// [`LAYER_STIFFNESS`] at the pair's effective mass. A vertex and a face of another layer
+    /// share no block of the matrix: the spring's Jacobian is lumped onto the diagonal there
+    /// ([`ContactSpring::add_jacobian`]) and completed in the solver's products
+    /// (`integrate::contact::OffPattern`).
+    ///
+    /// Why one spring between the vertex and the face (shown by chair.yaml, a cloth folding
+    /// over the seat's front edge, and a towel on a hammock, `tests/resting_layers.rs`): a
+    /// spring on each side, anchored on where the other side goes at the pair's common
+    /// velocity, holds both sides still against each other's ghost: the lower layer's own
+    /// tension, pushing up, goes into the ghost, so the hammock carries more than the towel's
+    /// weight and bows only under a load added for it. With the anchors moved by gravity's pull
+    /// over the substep as well, a lower layer held up by the cloth's tension (not an obstacle)
+    /// is pushed down by `g h^2` a substep at many times its weight: chair's cloth slides off
+    /// the seat. A vertex spring alone, with its last force as the face's load, carries into
+    /// that load whatever holds the vertex up (the seat under a face, thousands of times its
+    /// weight) and throws the face.
+    ///
+    /// The springs carry no friction: the repulsion's Coulomb friction still acts on the pairs
+    /// it answers.
+    pub(super) fn layer_springs(
+        &mut self,
+        stage: Option<&CollisionStage>,
+        s: &StartState,
+        caps: &Capabilities,
+    ) {
+        let Some(stage) = stage.filter(|_| caps.solves_contacts) else {
+            return;
+        };
+        let (x, mass, filter) = (&s.cloth.x, &s.cloth.mass, &self.constraints.filter);
+        let n = x.len();
+        let k = LAYER_STIFFNESS / (s.h_scene * s.h_scene);
+        for t in stage.self_touches() {
+            let [a, b, c] = t.triangle;
+            let [wa, wb, wc] = t.bary;
+            let mut spring = ContactSpring {
+                verts: [t.vertex, a, b, c],
+                weights: [1.0, -wa, -wb, -wc],
+                normal: t.normal,
+                point: Vec3::ZERO,
+                gap: 0.0,
+                stiffness: 0.0,
+                friction: 0.0,
+            };
+            if !spring.verts.iter().all(|&i| (i as usize) < n)
+                || spring.slots().all(|(i, _)| filter[i] == Filter::Fixed)
+            {
+                continue;
+            }
+            spring.gap = (spring.along(x) + RESTORE * t.gap).min(LAYER_REST * t.gap);
+            spring.stiffness = k * spring.point_mass(mass);
+            if spring.is_valid(n) && spring.gap > 0.0 {
+                self.constraints.contacts.push(spring);
+            }
+        }
+    }
+}
