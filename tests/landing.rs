@@ -55,7 +55,7 @@ fn a_cloth_dropped_on_a_sphere_lands_within_the_impact_bound() {
 /// The same drop at 48 x 48 (2.1 cm spacing): vertices of the flapping border reach the ball
 /// at up to several m/s, each within one substep. The solve stops them on the contact layer
 /// (an arrival spring on the layer's tangent plane, anchored where the path hit it when
-/// friction holds it there: `collide/arrival.rs`, `sim/coupling.rs`), so the collision pass
+/// friction holds it there: `collide/arrival.rs`, `sim/coupling/arrival.rs`), so the collision pass
 /// after it has nothing to push back by more than a third of the spacing and no substep of the
 /// landing is rolled back and split (`sim/fast.rs`, `jumped`); before, 9 were, 4 at 32 x 32
 /// and 12 at 64 x 64. No vertex ends a frame inside the ball, and every edge stays within the

@@ -1,4 +1,4 @@
-//! Tests for the divergence error of `src/sim/error.rs` and `src/sim/guard.rs`: the message says
+//! Tests for the divergence error of `src/sim/error.rs` and `src/sim/guard/`: the message says
 //! what the guard measured, and blames an effect (with advice on the step) only where the
 //! integrator's stability bound `h omega <= limit` is exceeded.
 

@@ -1,6 +1,6 @@
 //! Layers of cloth resting on each other: the vertex-triangle pairs the repulsion answered along
 //! a face normal, kept while the vertex stays over the face, for the solver to hold apart in
-//! the next substep (`sim/coupling.rs`) as it holds the cloth against obstacles.
+//! the next substep (`sim/coupling/layer_springs.rs`) as it holds the cloth against obstacles.
 //!
 //! Why: without them the solve knows nothing of cloth-cloth contact, so each substep it moves a
 //! vertex resting on a lower layer as far into it as its falling neighbours pull it (most of a
