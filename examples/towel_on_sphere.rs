@@ -12,8 +12,8 @@
 //! cargo run --release --example towel_on_sphere
 //! ```
 //!
-//! Every failure (a missing or invalid scene file, a step that diverges) comes back as an
-//! error from `main`, with the file and key at fault in its message.
+//! Every failure comes back as an error from `main`: a missing or invalid scene file names the
+//! file and the key at fault, a step that diverges names the cloth, the vertex and the time.
 
 use drape::collide::ShapeSpec;
 use drape::scene::Scene;
@@ -27,10 +27,12 @@ const SECONDS: f64 = 1.0;
 const RESOLUTION: usize = 24;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // 1. The scene: read from its YAML file, validated on load; fields can be changed in code.
+    // 1. The scene: read from its YAML file and validated on load. Its fields can then be
+    //    changed in code; such changes are not validated again, so keep them in range.
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sphere_drape.yaml");
     let mut scene = Scene::load(&path)?;
-    scene.cloths[0].grid.resolution = [RESOLUTION, RESOLUTION];
+    let towel = scene.cloths.first_mut().ok_or("the scene has no cloth")?;
+    towel.grid.resolution = [RESOLUTION, RESOLUTION];
     let sphere_top = sphere_top(&scene).ok_or("the scene has no sphere obstacle")?;
 
     // 2. Build and step. `step` advances one frame of `dt` (with the scene's substeps) and
