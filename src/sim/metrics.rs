@@ -1,7 +1,6 @@
 //! What one frame step did: the metrics every step reports, gathered from the solver's and
 //! the collision stage's reports of each substep.
 
-use super::guard::Why;
 use super::limit::LimitPass;
 use crate::collide::{CollisionReport, SelfContactReport};
 use crate::integrate::StepReport;
@@ -59,15 +58,6 @@ pub struct StepMetrics {
 }
 
 impl StepMetrics {
-    /// Counts a substep the guard split in two: for stability (before trying, or after a
-    /// rejected result) or for fast contact (predicted, or the response's jump).
-    pub(super) fn count_split(&mut self, why: Why) {
-        match why {
-            Why::Stability | Why::Rejected => self.subdivisions += 1,
-            Why::FastContact | Why::ResponseJump => self.contact_splits += 1,
-        }
-    }
-
     /// Adds one solve's counts.
     pub(super) fn add_solve(&mut self, stats: &StepReport) {
         self.force_evaluations += stats.force_evaluations;

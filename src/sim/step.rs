@@ -94,7 +94,7 @@ impl Simulation {
                 Ok(())
             }
             Err(Redo::Split(why)) => {
-                m.count_split(why);
+                why.count(m);
                 let [first, second] = span.halves();
                 self.substep(first, m)?;
                 self.substep(second, m)

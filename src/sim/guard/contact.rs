@@ -4,7 +4,9 @@
 //! the speeds in the scene allow, see [`crate::sim::strain`]) and the response-jump check (a
 //! vertex the response moved more than fast contact allows, see [`crate::sim::fast`]).
 
-use super::{Failure, Guard, GuardSettings, Inside, Redo, Verdict, Why};
+use super::settings::GuardSettings;
+use super::verdict::{Failure, Redo, Verdict, Why};
+use super::{Guard, Inside};
 use crate::cloth::Cloth;
 use crate::collide::CollisionStage;
 use crate::effects::EffectSet;

@@ -9,7 +9,7 @@
 //! the work done on the cloth from outside (wind, driven vertices, moving obstacles, released
 //! vertices) and the allowances spent.
 
-use super::GuardSettings;
+use super::settings::GuardSettings;
 use crate::cloth::Cloth;
 use crate::effects::{EffectSet, State};
 use crate::sim::energy::Energies;

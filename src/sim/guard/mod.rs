@@ -20,9 +20,14 @@
 mod contact;
 mod energy;
 mod outside;
+mod settings;
+mod verdict;
 
 pub(super) use energy::{Book, Sample};
 pub(super) use outside::{moving_contact_work, OutsideForces};
+pub use settings::{DivergencePolicy, GuardSettings};
+use verdict::rejected;
+pub(super) use verdict::{Failure, Redo, Verdict, Why};
 
 use super::error::Symptom;
 use super::metrics::StepMetrics;
@@ -32,104 +37,6 @@ use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, StageRollback};
 use crate::effects::EffectSet;
 use crate::Vec3;
-use serde::{Deserialize, Serialize};
-use std::fmt;
-
-/// What to do when a substep diverges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum DivergencePolicy {
-    /// Redo the substep as two half steps (recursively, up to `max_subdivisions` levels) and report it.
-    Subdivide,
-    /// Stop with a [`super::DivergenceError`].
-    Stop,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct GuardSettings {
-    pub policy: DivergencePolicy,
-    /// Levels of halving before giving up (2^levels substeps at most per substep).
-    pub max_subdivisions: u32,
-    /// Levels of halving fast contact may use (at most `max_subdivisions`; none: all of them).
-    /// A link that outruns the cloth splits the substep until it moves a third of a spacing
-    /// per piece, which for a large jump of a link over fine cloth costs many splits in one
-    /// frame. A live node bounds that cost here; the substeps that would have split further
-    /// are counted (`StepMetrics::contact_splits_refused`) and reported on `/diagnostics`.
-    pub max_contact_split_levels: Option<u32>,
-    /// Fastest plausible vertex speed (m/s); anything faster is treated as a blow-up.
-    pub max_speed: f64,
-    /// Allowed growth of kinetic + elastic energy in one substep beyond the work of gravity, wind
-    /// and moving attachments, relative to the energy at the start of the substep.
-    pub energy_growth: f64,
-}
-
-impl Default for GuardSettings {
-    fn default() -> Self {
-        Self {
-            policy: DivergencePolicy::Subdivide,
-            max_subdivisions: 8,
-            max_contact_split_levels: None,
-            max_speed: 500.0,
-            energy_growth: 0.5,
-        }
-    }
-}
-
-impl GuardSettings {
-    /// How many levels of halving fast contact may split a scene substep into: the guard's, or
-    /// fewer when `max_contact_split_levels` bounds what a live node spends on it.
-    fn split_levels(&self) -> u32 {
-        (self.max_contact_split_levels)
-            .map_or(self.max_subdivisions, |l| l.min(self.max_subdivisions))
-    }
-}
-
-impl fmt::Display for DivergencePolicy {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            DivergencePolicy::Subdivide => "subdivide",
-            DivergencePolicy::Stop => "stop",
-        })
-    }
-}
-
-/// Why a substep is redone as two halves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Why {
-    /// An explicit step over its stability limit: halved before trying (an unstable mode is
-    /// only caught by the energy check once it carries a visible share of the energy, and that
-    /// energy would stay in the cloth).
-    Stability,
-    /// A moving obstacle would outrun the cloth near it (see [`super::fast`]).
-    FastContact,
-    /// The guard rejected the result (non-finite, too fast, energy gained, stretched by the
-    /// collision response) and its policy subdivides.
-    Rejected,
-    /// The collision pass moved a vertex more than fast contact allows (see
-    /// [`super::fast::jumped`]).
-    ResponseJump,
-}
-
-/// The first vertex (flat index) a check found bad, and what it measured there.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) struct Failure {
-    pub vertex: usize,
-    pub symptom: Symptom,
-}
-
-/// The guard's answer when a substep cannot stand as it is; the state is back at the
-/// substep's start.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) enum Redo {
-    /// Redo it as two halves.
-    Split(Why),
-    /// Stop the run.
-    Fail(Failure),
-}
-
-/// The guard's verdict on one check: `Ok` goes on with the substep.
-pub(super) type Verdict = Result<(), Redo>;
 
 /// Whether cloth the scene started inside an obstacle is still on its way out: pushing it out
 /// stretches the cloth as far as the scene put it in, so the checks after the collision pass
@@ -376,15 +283,5 @@ impl Guard {
         self.book = saved.book;
         stage.restore(&saved.stage);
         Err(redo)
-    }
-}
-
-/// A rejected substep (already rolled back): redone as halves when the policy allows, else the
-/// run stops.
-fn rejected(g: &GuardSettings, span: Span, failure: Failure) -> Redo {
-    if g.policy == DivergencePolicy::Subdivide && span.depth < g.max_subdivisions {
-        Redo::Split(Why::Rejected)
-    } else {
-        Redo::Fail(failure)
     }
 }
