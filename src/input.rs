@@ -8,8 +8,8 @@
 //!   file that grows or lies about its size cannot make drape read without bound;
 //! - symlinks are resolved before any containment check ([`contained`]), so a link inside an
 //!   allowed tree that points outside it is refused before the target is opened;
-//! - every file opened is remembered by device and inode ([`opened`]), so the recorder can
-//!   refuse to write onto one of its own inputs.
+//! - every file opened is remembered by device and inode ([`opened`]), so an output
+//!   ([`crate::output`]) is never written onto one of the command's own inputs.
 
 use std::fmt;
 use std::io::Read;
@@ -25,6 +25,14 @@ pub enum InputKind {
     Mesh,
     JointsBag,
     NodeParams,
+    /// A sweep file (`drape sweep ...`).
+    Sweep,
+    /// A sweep's `plan.json`.
+    SweepPlan,
+    /// A sweep job's result record (`jobs/I.json`).
+    JobRecord,
+    /// A cached study reference solution.
+    StudyCache,
 }
 
 impl InputKind {
@@ -37,6 +45,11 @@ impl InputKind {
             InputKind::Urdf => 16 << 20,
             InputKind::Mesh => 256 << 20,
             InputKind::JointsBag => 1 << 30,
+            InputKind::Sweep => 4 << 20,
+            InputKind::JobRecord => 1 << 20,
+            // Every job's values, one line each, for at most `sweep::plan::MAX_JOBS` jobs.
+            InputKind::SweepPlan => 256 << 20,
+            InputKind::StudyCache => 256 << 20,
         }
     }
 }
@@ -49,6 +62,10 @@ impl fmt::Display for InputKind {
             InputKind::Mesh => "mesh",
             InputKind::JointsBag => "joints bag",
             InputKind::NodeParams => "parameters file",
+            InputKind::Sweep => "sweep file",
+            InputKind::SweepPlan => "sweep plan",
+            InputKind::JobRecord => "job record",
+            InputKind::StudyCache => "study cache",
         })
     }
 }

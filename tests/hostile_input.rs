@@ -194,6 +194,12 @@ fn report_only() -> bool {
 }
 
 fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
+    drape_limited(args, None)
+}
+
+/// [`drape`] with a limit on the size of any file the child writes (`RLIMIT_FSIZE`: a write
+/// past it fails with `EFBIG`, as on a full disk; `SIGXFSZ` is ignored so the write returns).
+fn drape_limited(args: &[&std::ffi::OsStr], file_size: Option<u64>) -> Outcome {
     let mut cmd = Command::new(binary());
     cmd.args(args)
         .env("RUST_LOG", "error")
@@ -204,13 +210,23 @@ fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             let lim = libc::rlimit {
                 rlim_cur: MEMORY_LIMIT,
                 rlim_max: MEMORY_LIMIT,
             };
             if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
                 return Err(std::io::Error::last_os_error());
+            }
+            if let Some(n) = file_size {
+                let lim = libc::rlimit {
+                    rlim_cur: n,
+                    rlim_max: n,
+                };
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
             }
             Ok(())
         });
@@ -1373,4 +1389,274 @@ fn a_signal_during_build_and_sewing_ends_the_run() {
         .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
+}
+
+// ---------------------------------------------------------------- outputs
+
+fn os(args: &[&str]) -> Vec<std::ffi::OsString> {
+    args.iter().map(std::ffi::OsString::from).collect()
+}
+
+fn run(args: &[std::ffi::OsString]) -> Outcome {
+    let a: Vec<&std::ffi::OsStr> = args.iter().map(|x| x.as_os_str()).collect();
+    drape(&a)
+}
+
+fn run_limited(args: &[std::ffi::OsString], file_size: u64) -> Outcome {
+    let a: Vec<&std::ffi::OsStr> = args.iter().map(|x| x.as_os_str()).collect();
+    drape_limited(&a, Some(file_size))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf8 path")
+}
+
+/// `scene/s.yaml`: a sweep over the tiny scene (`scene/scene.yaml`) into `scene/out`.
+fn sweep_yaml(l: &Layout, body: &str) -> PathBuf {
+    l.scene(SCENE);
+    l.write(
+        "scene/s.yaml",
+        format!("name: s\nscene: scene.yaml\nout: out\n{body}"),
+    )
+}
+
+/// A bag of the tiny scene, recorded by drape (`scene/b.mcap`).
+fn tiny_bag(l: &Layout) -> PathBuf {
+    let scene = l.scene(SCENE);
+    let bag = l.path("scene/b.mcap");
+    let o = record(&scene, &bag, &[]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    bag
+}
+
+/// Staging files (`.partial`, `.tmp`) left anywhere under the layout.
+fn staging_left(l: &Layout) -> Vec<PathBuf> {
+    fn walk(d: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(rd) = std::fs::read_dir(d) else { return };
+        for e in rd.flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.contains(".partial") || name.contains(".tmp") || name.ends_with(".part") {
+                out.push(p.clone());
+            }
+            if p.is_dir() && !p.is_symlink() {
+                walk(&p, out);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&l.root, &mut out);
+    out
+}
+
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let l = Layout::new();
+    let bag = tiny_bag(&l);
+    let scene = l.path("scene/scene.yaml");
+    let sweep = sweep_yaml(&l, "");
+    let out = l.path("scene/out.mcap");
+    let gif = l.path("scene/b.gif");
+    std::fs::hard_link(&bag, &gif).expect("hard link");
+    let manifest = l.symlink(&scene, "scene/m.yaml");
+    let cases: Vec<(&str, Vec<std::ffi::OsString>, PathBuf)> = vec![
+        (
+            "record --summary = scene",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                s(&out),
+                "--summary",
+                s(&scene),
+            ]),
+            scene.clone(),
+        ),
+        (
+            "record --summary = --out",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                s(&out),
+                "--summary",
+                s(&out),
+            ]),
+            out.clone(),
+        ),
+        (
+            "render --out = its bag",
+            os(&["render", s(&bag), "--out", s(&bag)]),
+            bag.clone(),
+        ),
+        (
+            "render --out = a hard link of its bag",
+            os(&["render", s(&bag), "--out", s(&gif)]),
+            gif.clone(),
+        ),
+        (
+            "emit slurm --script = the sweep file",
+            os(&["sweep", "emit", "slurm", s(&sweep), "--script", s(&sweep)]),
+            sweep.clone(),
+        ),
+        (
+            "emit k8s --manifest = the sweep file",
+            os(&["sweep", "emit", "k8s", s(&sweep), "--manifest", s(&sweep)]),
+            sweep.clone(),
+        ),
+        (
+            "emit k8s --manifest = a symlink to the scene",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--manifest",
+                s(&manifest),
+            ]),
+            manifest.clone(),
+        ),
+    ];
+    for (name, args, named) in cases {
+        let before = l.hashes();
+        let o = run(&args);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&[s(&named), "refusing to overwrite"]),
+        );
+        assert!(report_only() || !out.exists(), "{name}: wrote the bag");
+    }
+    assert!(staging_left(&l).is_empty(), "{:?}", staging_left(&l));
+
+    // A sweep whose output folder holds its own scene as plan.json (a hard link) or its sweep
+    // file as manifest.csv (a symlink).
+    std::fs::create_dir_all(l.path("scene/out")).expect("mkdir");
+    std::fs::hard_link(&scene, l.path("scene/out/plan.json")).expect("hard link");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    judge(
+        "plan.json = scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "refusing to overwrite"]),
+    );
+    std::fs::remove_file(l.path("scene/out/plan.json")).expect("rm");
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    l.symlink(&sweep, "scene/out/manifest.csv");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&l.path("scene/out"))]));
+    judge(
+        "manifest.csv = sweep file",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["manifest.csv", "refusing to overwrite"]),
+    );
+    assert!(staging_left(&l).is_empty(), "{:?}", staging_left(&l));
+}
+
+#[test]
+fn a_full_disk_leaves_nothing_under_the_final_name() {
+    let l = Layout::new();
+    let bag = tiny_bag(&l);
+    let scene = l.path("scene/scene.yaml");
+    let sweep = sweep_yaml(&l, "");
+    let png = l.path("scene/t.png");
+    let gif = l.path("scene/t.gif");
+    let summary = l.path("scene/summary.json");
+    let out = l.path("scene/out.mcap");
+    let cases: Vec<(&str, Vec<std::ffi::OsString>, u64, PathBuf)> = vec![
+        (
+            "PNG",
+            os(&["render", s(&bag), "--out", s(&png)]),
+            2000,
+            png.clone(),
+        ),
+        (
+            "GIF",
+            os(&["render", s(&bag), "--out", s(&gif)]),
+            2000,
+            gif.clone(),
+        ),
+        // The GIF's last bytes (trailer and flush) fail: a limit just under its full size.
+        (
+            "GIF trailer",
+            os(&["render", s(&bag), "--out", s(&gif), "--size", "8x8"]),
+            0,
+            gif.clone(),
+        ),
+        (
+            "--summary",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                "/dev/null",
+                "--summary",
+                s(&summary),
+            ]),
+            100,
+            summary.clone(),
+        ),
+        (
+            "bag",
+            os(&["record", "--quiet", "--scene", s(&scene), "--out", s(&out)]),
+            4000,
+            out.clone(),
+        ),
+        (
+            "sweep plan.json",
+            os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]),
+            64,
+            l.path("scene/out/plan.json"),
+        ),
+        (
+            "emit script",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--out",
+                s(&l.path("scene/o2")),
+                "--script",
+                s(&l.path("scene/x.sh")),
+            ]),
+            400,
+            l.path("scene/x.sh"),
+        ),
+    ];
+    for (name, args, mut limit, target) in cases {
+        if limit == 0 {
+            // Measure the full size, then allow one byte less.
+            let o = run(&args);
+            assert_eq!(o.code, Some(0), "{name}: {}", o.stderr);
+            limit = std::fs::metadata(&target).expect("written").len() - 1;
+            std::fs::remove_file(&target).expect("rm");
+        }
+        let before = l.hashes();
+        let o = run_limited(&args, limit);
+        judge(name, &l, &before, &o, Expect::Error(&[s(&target)]));
+        assert!(
+            report_only() || !target.exists(),
+            "{name}: {} left",
+            target.display()
+        );
+        assert!(
+            staging_left(&l).is_empty(),
+            "{name}: {:?}",
+            staging_left(&l)
+        );
+    }
 }

@@ -312,8 +312,7 @@ fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
         );
         outcomes.push(o);
     }
-    std::fs::write(&out, markdown(&outcomes, res))
-        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", out.display()))?;
+    drape::output::write(&out, markdown(&outcomes, res).as_bytes(), &[])?;
     let failed: Vec<&str> = outcomes
         .iter()
         .filter(|o| !o.passed())
@@ -386,6 +385,14 @@ fn record(args: RecordArgs) -> Result<()> {
     // the bag while recording.
     install_stop_handler(false)?;
     let scene = drape::scene::Scene::load(&scene_path)?;
+    // The summary goes through the same output rules as the bag; checked before the run so
+    // that a summary naming an input (or the bag) fails before anything is simulated.
+    if let Some(file) = &summary_file {
+        let mut also = vec![out.as_path()];
+        also.extend(joints.as_deref());
+        drape::output::check(file, &also)
+            .with_context(|| format!("--summary {}", file.display()))?;
+    }
     if let Some(d) = duration {
         scene
             .check_run_length(d)
@@ -463,7 +470,7 @@ fn record(args: RecordArgs) -> Result<()> {
     let run = summary.run_summary();
     print!("{}", run.table());
     if let Some(file) = summary_file {
-        std::fs::write(&file, run.to_json() + "\n")
+        drape::output::write(&file, (run.to_json() + "\n").as_bytes(), &[&out])
             .with_context(|| format!("--summary {}", file.display()))?;
     }
     Ok(())

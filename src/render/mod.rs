@@ -84,6 +84,9 @@ pub enum RenderError {
         #[source]
         source: WriteError,
     },
+    /// The picture would overwrite an input, or cannot be written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     #[error("tile size {width}x{height} is out of range (at most 16 million pixels)")]
     TileSize { width: usize, height: usize },
     #[error("no bag to render")]
@@ -332,6 +335,8 @@ pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), Ren
     if bags.is_empty() {
         return Err(RenderError::NoBags);
     }
+    let inputs: Vec<&Path> = bags.iter().map(PathBuf::as_path).collect();
+    crate::output::check(out, &inputs)?;
     let gif = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
@@ -370,21 +375,20 @@ pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), Ren
         }
         .max(1);
         let delay_cs = ((period_ns as f64 * stride as f64) / 1e7).round().max(2.0) as u16;
-        write_gif(out, &frames, delay_cs).map_err(write_err)
+        let mut file = crate::output::Output::create(out, &inputs)?;
+        write_gif(&mut file, &frames, delay_cs).map_err(write_err)?;
+        Ok(file.finish()?)
     } else {
         let t = tiles(bags, o)?;
-        write_png(out, &sheet(&t, o)).map_err(write_err)
+        let mut file = crate::output::Output::create(out, &inputs)?;
+        write_png(&mut file, &sheet(&t, o)).map_err(write_err)?;
+        Ok(file.finish()?)
     }
 }
 
-/// Writes an RGB PNG.
-pub fn write_png(path: &Path, img: &Image) -> Result<(), WriteError> {
-    let file = std::fs::File::create(path)?;
-    let mut enc = png::Encoder::new(
-        std::io::BufWriter::new(file),
-        img.width as u32,
-        img.height as u32,
-    );
+/// Writes an RGB PNG to `out` (e.g. a [`crate::output::Output`]).
+pub fn write_png(out: impl std::io::Write, img: &Image) -> Result<(), WriteError> {
+    let mut enc = png::Encoder::new(out, img.width as u32, img.height as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     let mut w = enc.write_header()?;
@@ -392,8 +396,13 @@ pub fn write_png(path: &Path, img: &Image) -> Result<(), WriteError> {
     Ok(w.finish()?)
 }
 
-/// Writes a looping GIF, `delay_cs` hundredths of a second per frame.
-pub fn write_gif(path: &Path, frames: &[Image], delay_cs: u16) -> Result<(), WriteError> {
+/// Writes a looping GIF to `out`, `delay_cs` hundredths of a second per frame; every byte,
+/// the trailer included, is written (or the error returned) before this returns.
+pub fn write_gif(
+    out: impl std::io::Write,
+    frames: &[Image],
+    delay_cs: u16,
+) -> Result<(), WriteError> {
     let first = frames.first().ok_or(WriteError::NoFrames)?;
     let (Ok(w), Ok(h)) = (u16::try_from(first.width), u16::try_from(first.height)) else {
         return Err(WriteError::TooLargeForGif {
@@ -401,13 +410,14 @@ pub fn write_gif(path: &Path, frames: &[Image], delay_cs: u16) -> Result<(), Wri
             height: first.height,
         });
     };
-    let file = std::fs::File::create(path)?;
-    let mut enc = gif::Encoder::new(std::io::BufWriter::new(file), w, h, &[])?;
+    let mut enc = gif::Encoder::new(out, w, h, &[])?;
     enc.set_repeat(gif::Repeat::Infinite)?;
     for f in frames {
         let mut frame = gif::Frame::from_rgb_speed(w, h, &f.rgb, 10);
         frame.delay = delay_cs;
         enc.write_frame(&frame)?;
     }
+    let mut out = enc.into_inner()?;
+    std::io::Write::flush(&mut out)?;
     Ok(())
 }

@@ -61,10 +61,7 @@ impl Manifest {
 /// Merges the job records of `out` into `manifest.jsonl` and `manifest.csv` there.
 pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
     let plan_path = out.join("plan.json");
-    let text = std::fs::read_to_string(&plan_path).map_err(|source| SweepError::Io {
-        path: plan_path.clone(),
-        source,
-    })?;
+    let text = crate::input::read_text(&plan_path, crate::input::InputKind::SweepPlan)?;
     let plan: PlanFile = serde_json::from_str(&text).map_err(|source| SweepError::Json {
         origin: plan_path.display().to_string(),
         source,
@@ -83,9 +80,12 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
         lines.push_str(&line);
         lines.push('\n');
     }
-    write_atomic(&jsonl, &lines)?;
+    // The sweep file and its scene are inputs of the sweep even when this command does not
+    // read them: the manifests never replace them.
+    let also = [plan.sweep.as_path(), plan.scene.as_path()];
+    crate::output::write(&jsonl, lines.as_bytes(), &also)?;
     let csv = out.join("manifest.csv");
-    write_atomic(&csv, &to_csv(&entries))?;
+    crate::output::write(&csv, to_csv(&entries).as_bytes(), &also)?;
     Ok(Manifest {
         entries,
         jsonl,

@@ -19,6 +19,12 @@ pub enum SweepError {
         #[source]
         source: std::io::Error,
     },
+    /// The sweep file (or another file a sweep reads) is not a regular file of bounded size.
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
+    /// An output would overwrite an input, or could not be written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     /// The sweep file or the base scene is not YAML of the expected form.
     #[error("{origin}: not a valid sweep file or scene")]
     Yaml {
@@ -39,7 +45,7 @@ pub enum SweepError {
         origin: String,
         path: PathBuf,
         #[source]
-        source: std::io::Error,
+        source: crate::input::InputError,
     },
     /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
     #[error("{origin}: {key}")]

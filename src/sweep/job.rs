@@ -76,7 +76,8 @@ impl JobFiles {
 
     /// The job's record, if it has a readable one.
     pub fn read_record(&self) -> Option<JobRecord> {
-        let text = std::fs::read_to_string(&self.record).ok()?;
+        let text =
+            crate::input::read_text(&self.record, crate::input::InputKind::JobRecord).ok()?;
         serde_json::from_str(&text).ok()
     }
 
@@ -124,16 +125,10 @@ pub fn params_json(job: &Job) -> serde_json::Map<String, serde_json::Value> {
         .collect()
 }
 
-/// Writes `text` to `path` through a temporary file and a rename, so readers see the old file
-/// or the whole new one.
+/// Writes `text` to `path` through [`crate::output`]: never onto an input, through a temporary
+/// file and a rename, so readers see the old file or the whole new one.
 pub fn write_atomic(path: &Path, text: &str) -> Result<(), SweepError> {
-    let io = |source| SweepError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, text).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    Ok(crate::output::write(path, text.as_bytes(), &[])?)
 }
 
 /// SHA-256 of a file, lowercase hex.

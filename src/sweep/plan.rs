@@ -121,10 +121,7 @@ impl Sweep {
     /// every job (the scene's strict parse and validation), so that a bad sweep fails here,
     /// before any job runs.
     pub fn load(path: &Path) -> Result<Sweep, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::Sweep)?;
         let sweep = Self::from_yaml(&text, path)?;
         for i in 0..sweep.count {
             sweep.job_spec(&sweep.job(i)?)?;
@@ -136,10 +133,7 @@ impl Sweep {
     /// needs before running its own job (the whole plan was checked by `plan`, `emit` or
     /// `run --local`).
     pub fn open(path: &Path) -> Result<Sweep, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::Sweep)?;
         Self::from_yaml(&text, path)
     }
 
@@ -161,8 +155,8 @@ impl Sweep {
         }
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let scene_path = dir.join(&file.scene);
-        let scene_text =
-            std::fs::read_to_string(&scene_path).map_err(|source| SweepError::SceneFile {
+        let scene_text = crate::input::read_text(&scene_path, crate::input::InputKind::Scene)
+            .map_err(|source| SweepError::SceneFile {
                 origin: origin.clone(),
                 path: scene_path.clone(),
                 source,

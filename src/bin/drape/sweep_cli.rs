@@ -269,8 +269,7 @@ fn emit(target: EmitTarget) -> Result<()> {
     let write = |path: Option<PathBuf>, text: String| -> Result<()> {
         match path {
             Some(p) => {
-                std::fs::write(&p, text)
-                    .with_context(|| format!("cannot write {}", p.display()))?;
+                drape::output::write(&p, text.as_bytes(), &[])?;
                 println!("wrote {}", p.display());
             }
             None => print!("{text}"),
@@ -290,6 +289,10 @@ fn emit(target: EmitTarget) -> Result<()> {
             sbatch,
         } => {
             let s = Sweep::load(&file)?;
+            // The script is checked as an output before the plan is written beside the jobs.
+            if let Some(p) = &script {
+                drape::output::check(p, &[])?;
+            }
             let abs = |p: &std::path::Path| -> Result<PathBuf> {
                 std::path::absolute(p).with_context(|| format!("cannot resolve {}", p.display()))
             };
