@@ -319,12 +319,16 @@ pub fn contained(path: &Path, allowed: &[PathBuf]) -> Result<PathBuf, InputError
 }
 
 /// Whether `path` names the same file (device and inode) as one of the inputs read so far.
+/// An input is only one while its own path still leads to that file: an inode freed by a
+/// deleted or replaced input (and reused for a new file) is not mistaken for it.
 pub fn is_an_input(path: &Path) -> Option<OpenedInput> {
     use std::os::unix::fs::MetadataExt;
     let meta = std::fs::metadata(path).ok()?;
-    opened()
-        .into_iter()
-        .find(|o| o.dev == meta.dev() && o.ino == meta.ino())
+    opened().into_iter().find(|o| {
+        o.dev == meta.dev()
+            && o.ino == meta.ino()
+            && std::fs::metadata(&o.path).is_ok_and(|m| m.dev() == o.dev && m.ino() == o.ino)
+    })
 }
 
 /// The error and every cause below it, one per line: `error: <top>` then `  caused by: ...`.

@@ -1660,3 +1660,203 @@ fn a_full_disk_leaves_nothing_under_the_final_name() {
         );
     }
 }
+
+// ---------------------------------------------------------------- scheduler files
+
+/// Documents in a YAML text, and the `kind` of each.
+fn yaml_kinds(text: &str) -> Vec<String> {
+    use serde::Deserialize;
+    serde_yaml_ng::Deserializer::from_str(text)
+        .map(|d| {
+            let v = serde_yaml_ng::Value::deserialize(d).expect("YAML");
+            v.get("kind")
+                .and_then(|k| k.as_str())
+                .unwrap_or("")
+                .to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn names_and_paths_cannot_inject_into_scheduler_files() {
+    let l = Layout::new();
+    let script = l.path("scene/x.sh");
+    let manifest = l.path("scene/x.yaml");
+    // Names that would put a live shell line into the script or a second document (a Pod)
+    // into the manifest are refused when the sweep is read, by every command.
+    for (name, text) in [
+        ("backtick and newline", "\"a`touch /tmp/pwned`\\nb\""),
+        ("second document", "\"a\\n---\\nkind: Pod\\n\""),
+        ("shell operators", "\"a; rm -rf ~\""),
+    ] {
+        let sweep = sweep_yaml(&l, "");
+        let sweep = l.write(
+            "scene/s.yaml",
+            std::fs::read_to_string(&sweep)
+                .expect("read")
+                .replace("name: s", &format!("name: {text}")),
+        );
+        for args in [
+            os(&["sweep", "plan", s(&sweep)]),
+            os(&["sweep", "emit", "slurm", s(&sweep), "--script", s(&script)]),
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--manifest",
+                s(&manifest),
+            ]),
+        ] {
+            let before = l.hashes();
+            let o = run(&args);
+            judge(name, &l, &before, &o, Expect::Error(&["s.yaml", "name"]));
+            assert!(report_only() || (!script.exists() && !manifest.exists()));
+        }
+    }
+    // Paths and options with a newline (an `#SBATCH` line of their own) or characters an
+    // `#SBATCH` line cannot carry are refused, naming the option.
+    let sweep = sweep_yaml(&l, "");
+    let nl_out = l.path("scene/o\n#SBATCH --mem=1T");
+    for (name, args, key) in [
+        (
+            "out with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--out",
+                s(&nl_out),
+                "--script",
+                s(&script),
+            ]),
+            "out",
+        ),
+        (
+            "partition with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--partition",
+                "p\n#SBATCH --mem=1T",
+                "--script",
+                s(&script),
+            ]),
+            "--partition",
+        ),
+        (
+            "sbatch with a command substitution",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--sbatch=--comment=$(id)",
+                "--script",
+                s(&script),
+            ]),
+            "--sbatch",
+        ),
+        (
+            "k8s out with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--out",
+                "/data/o\n---\nkind: Pod",
+                "--manifest",
+                s(&manifest),
+            ]),
+            "--out",
+        ),
+        (
+            "k8s image with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--image",
+                "x\nkind: Pod",
+                "--manifest",
+                s(&manifest),
+            ]),
+            "--image",
+        ),
+    ] {
+        let before = l.hashes();
+        let o = run(&args);
+        judge(name, &l, &before, &o, Expect::Error(&[key]));
+        assert!(
+            report_only() || (!script.exists() && !manifest.exists()),
+            "{name}"
+        );
+    }
+    assert!(report_only() || !l.path("scene/o\n#SBATCH --mem=1T").exists());
+
+    // Valid but awkward values: the script passes `bash -n` with one `exec` line, the
+    // manifest is exactly one document, a Job, with the values intact.
+    let sweep = l.write(
+        "scene/s.yaml",
+        "name: my.sweep-1\nscene: scene.yaml\nout: out\ngrid:\n  duration: [0.1, 0.2]\n",
+    );
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "emit",
+        "slurm",
+        s(&sweep),
+        "--script",
+        s(&script),
+        "--drape",
+        "/opt/it's here/drape",
+    ]));
+    judge("valid slurm", &l, &before, &o, Expect::Ok);
+    let text = std::fs::read_to_string(&script).expect("script");
+    let check = Command::new("bash")
+        .arg("-n")
+        .arg(&script)
+        .output()
+        .expect("bash");
+    assert!(
+        check.status.success(),
+        "bash -n: {}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let live: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .collect();
+    assert_eq!(live.len(), 3, "{text}");
+    assert!(
+        live[2].starts_with("exec '/opt/it'\\''s here/drape' sweep run "),
+        "{text}"
+    );
+    assert!(text.contains("#SBATCH --array=0-1\n"), "{text}");
+    let image = "reg.example/drape:1 # not: a comment\"'";
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "emit",
+        "k8s",
+        s(&sweep),
+        "--manifest",
+        s(&manifest),
+        "--image",
+        image,
+        "--pvc",
+        "a: b",
+    ]));
+    judge("valid k8s", &l, &before, &o, Expect::Ok);
+    let text = std::fs::read_to_string(&manifest).expect("manifest");
+    assert_eq!(yaml_kinds(&text), ["Job"], "{text}");
+    let job: serde_yaml_ng::Value = serde_yaml_ng::from_str(&text).expect("one document");
+    let c = &job["spec"]["template"]["spec"]["containers"][0];
+    assert_eq!(c["image"].as_str(), Some(image));
+    assert_eq!(job["spec"]["completions"].as_u64(), Some(2));
+}

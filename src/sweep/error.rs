@@ -116,6 +116,9 @@ pub enum JobSceneError {
 pub enum KeyError {
     #[error("must be at least 1")]
     ZeroSamples,
+    /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or too long).
+    #[error("must be 1 to {} letters, digits, spaces, `-`, `_` or `.`{}", super::plan::MAX_NAME, found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
+    BadName { found: Option<String> },
     /// A key of `set`, `grid` or `random` that is not a string (`got`: the key as JSON).
     #[error("keys must be key paths (strings), got {got}")]
     NotAKeyPath { got: String },

@@ -13,6 +13,7 @@
 pub mod collect;
 pub mod draw;
 pub mod emit;
+pub use emit::EmitError;
 mod error;
 pub mod job;
 pub mod keypath;

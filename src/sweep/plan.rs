@@ -231,11 +231,16 @@ impl Sweep {
             )),
         };
         let name = if file.name.is_empty() {
+            // The file's stem, with anything a name may not hold replaced.
             path.file_stem()
                 .and_then(|s| s.to_str())
                 .unwrap_or("sweep")
-                .to_string()
+                .chars()
+                .take(MAX_NAME)
+                .map(|c| if name_char(c) { c } else { '_' })
+                .collect()
         } else {
+            check_name(&file.name).map_err(|e| key_err("name", e))?;
             file.name.clone()
         };
         let sweep = Sweep {
@@ -396,6 +401,25 @@ impl Sweep {
     pub fn jobs(&self) -> impl Iterator<Item = Job> + '_ {
         (0..self.count).filter_map(|i| self.job(i).ok())
     }
+}
+
+/// Longest sweep `name`.
+pub const MAX_NAME: usize = 100;
+
+/// What a sweep name may hold: it reaches job names, log file names and comment lines of the
+/// scheduler files (`sweep emit`), so nothing a shell, YAML or a file name would read as syntax.
+fn name_char(c: char) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | ' ')
+}
+
+fn check_name(name: &str) -> Result<(), KeyError> {
+    let bad = name.chars().find(|c| !name_char(*c));
+    if name.chars().count() > MAX_NAME || bad.is_some() {
+        return Err(KeyError::BadName {
+            found: bad.map(|c| format!("{c:?}")),
+        });
+    }
+    Ok(())
 }
 
 /// Sets one sweep value on the scene document (or records the joints bag).

@@ -297,22 +297,24 @@ fn emit(target: EmitTarget) -> Result<()> {
                 std::path::absolute(p).with_context(|| format!("cannot resolve {}", p.display()))
             };
             let out = abs(&out.unwrap_or_else(|| s.out_dir.clone()))?;
-            write_plan(&s, &out)?;
-            std::fs::create_dir_all(out.join("logs"))
-                .with_context(|| format!("cannot create {}/logs", out.display()))?;
             let opts = emit::SlurmOptions {
                 drape: match drape {
                     Some(d) => d,
                     None => std::env::current_exe().context("cannot find the drape executable")?,
                 },
-                out,
+                out: out.clone(),
                 cpus_per_task,
                 time,
                 partition,
                 max_parallel,
                 extra: sbatch,
             };
-            write(script, emit::slurm_script(&s, &abs(&file)?, &opts))?;
+            // Every value is checked for the script before anything is written.
+            let text = emit::slurm_script(&s, &abs(&file)?, &opts)?;
+            write_plan(&s, &out)?;
+            std::fs::create_dir_all(out.join("logs"))
+                .with_context(|| format!("cannot create {}/logs", out.display()))?;
+            write(script, text)?;
         }
         EmitTarget::K8s {
             file,
@@ -344,7 +346,7 @@ fn emit(target: EmitTarget) -> Result<()> {
                 cpu,
                 memory,
             };
-            write(manifest, emit::k8s_job(&s, &name, &opts))?;
+            write(manifest, emit::k8s_job(&s, &name, &opts)?)?;
         }
     }
     Ok(())
