@@ -1860,3 +1860,81 @@ fn names_and_paths_cannot_inject_into_scheduler_files() {
     assert_eq!(c["image"].as_str(), Some(image));
     assert_eq!(job["spec"]["completions"].as_u64(), Some(2));
 }
+
+// ---------------------------------------------------------------- unbounded sweeps
+
+#[test]
+fn sweeps_are_bounded_before_any_work() {
+    let l = Layout::new();
+    let list = |n: usize| format!("[{}]", vec!["0.1"; n].join(", "));
+    let big = "x".repeat(5000);
+    for (name, body, key) in [
+        (
+            "samples 1e9",
+            "samples: 1000000000\n".to_string(),
+            "samples",
+        ),
+        (
+            "samples u64::MAX",
+            "samples: 18446744073709551615\n".to_string(),
+            "samples",
+        ),
+        (
+            "a 1e9 grid",
+            format!(
+                "grid:\n  duration: {}\n  solver.dt: {}\n  cloths[0].material.stretch: {}\n",
+                list(1000),
+                list(1000),
+                list(1000)
+            ),
+            "grid",
+        ),
+        (
+            "1e5 jobs of a large scene document",
+            format!("samples: 100000\ngrid:\n  name: [\"{big}\"]\n"),
+            "grid",
+        ),
+    ] {
+        let sweep = sweep_yaml(&l, &body);
+        for args in [
+            os(&["sweep", "plan", s(&sweep)]),
+            os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]),
+            os(&["sweep", "emit", "k8s", s(&sweep)]),
+        ] {
+            let before = l.hashes();
+            let o = run(&args);
+            judge(
+                name,
+                &l,
+                &before,
+                &o,
+                Expect::Error(&["s.yaml", key, "jobs"]),
+            );
+        }
+        assert!(
+            report_only() || !l.path("scene/out/plan.json").exists(),
+            "{name}"
+        );
+    }
+    // The largest sweep allowed: one job of it runs without building the plan in memory
+    // (the child's address space is limited), and its plan file streams to disk.
+    let sweep = sweep_yaml(
+        &l,
+        "samples: 100000\nrandom:\n  duration: { uniform: [0.1, 0.12] }\n",
+    );
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "run",
+        s(&sweep),
+        "--index",
+        "99999",
+        "--quiet",
+    ]));
+    judge("one job of 1e5", &l, &before, &o, Expect::Ok);
+    let plan = std::fs::read_to_string(l.path("scene/out/plan.json")).expect("plan");
+    let plan: serde_json::Value = serde_json::from_str(&plan).expect("plan is JSON");
+    assert_eq!(plan["job_count"].as_u64(), Some(100_000));
+    assert_eq!(plan["jobs"].as_array().map(Vec::len), Some(100_000));
+    assert!(l.path("scene/out/jobs/099999.json").is_file());
+}

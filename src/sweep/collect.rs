@@ -7,7 +7,7 @@
 //! is `failed` too.
 
 use super::error::SweepError;
-use super::job::{params_json, write_atomic, JobFiles, JobRecord, Status};
+use super::job::{params_json, JobFiles, JobRecord, Status};
 use super::plan::{Job, Sweep};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -22,25 +22,56 @@ pub struct PlanFile {
     pub jobs: Vec<Job>,
 }
 
-/// Writes `plan.json` into `out` (atomically; concurrent writers write the same text).
+/// Writes `plan.json` into `out` (through [`crate::output`]; concurrent writers write the same
+/// text). The jobs are computed and written one at a time, so the plan is never held whole in
+/// memory, and the file is refused once it passes the sweep plan's size cap.
 pub fn write_plan(sweep: &Sweep, out: &Path) -> Result<PathBuf, SweepError> {
+    use std::io::Write;
     std::fs::create_dir_all(out).map_err(|source| SweepError::Io {
         path: out.to_path_buf(),
         source,
     })?;
-    let plan = PlanFile {
-        name: sweep.name.clone(),
-        sweep: sweep.path.clone(),
-        scene: sweep.scene_path.clone(),
-        job_count: sweep.job_count(),
-        jobs: sweep.jobs().collect(),
-    };
     let path = out.join("plan.json");
-    let text = serde_json::to_string(&plan).map_err(|source| SweepError::Encode {
-        what: "the plan".into(),
+    let also = [sweep.path.as_path(), sweep.scene_path.as_path()];
+    let mut file = crate::output::Output::create(&path, &also)?;
+    let cap = crate::input::InputKind::SweepPlan.cap();
+    let encode = |what: &str, source| SweepError::Encode {
+        what: what.to_string(),
         source,
-    })?;
-    write_atomic(&path, &(text + "\n"))?;
+    };
+    let io = |source| SweepError::Io {
+        path: path.clone(),
+        source,
+    };
+    let head = serde_json::json!({
+        "name": sweep.name,
+        "sweep": sweep.path,
+        "scene": sweep.scene_path,
+        "job_count": sweep.job_count(),
+    });
+    // The fields in `PlanFile`'s order, then the jobs.
+    let mut text = String::from("{");
+    for key in ["name", "sweep", "scene", "job_count"] {
+        let v = serde_json::to_string(&head[key]).map_err(|e| encode("the plan", e))?;
+        text.push_str(&format!("\"{key}\":{v},"));
+    }
+    text.push_str("\"jobs\":[");
+    file.write_all(text.as_bytes()).map_err(io)?;
+    let mut written = text.len() as u64;
+    for (k, job) in sweep.jobs().enumerate() {
+        let mut line = if k == 0 { String::new() } else { ",".into() };
+        line.push_str(
+            &serde_json::to_string(&job)
+                .map_err(|e| encode(&format!("job {} of the plan", job.index), e))?,
+        );
+        written += line.len() as u64;
+        if written > cap {
+            return Err(SweepError::PlanTooLarge { path, cap });
+        }
+        file.write_all(line.as_bytes()).map_err(io)?;
+    }
+    file.write_all(b"]}\n").map_err(io)?;
+    file.finish()?;
     Ok(path)
 }
 

@@ -85,8 +85,9 @@ pub enum SweepError {
     },
     #[error("job index {index} is out of range: the sweep has {count} jobs (0 to {})", count.saturating_sub(1))]
     IndexOutOfRange { index: usize, count: usize },
-    #[error("{origin}: too many jobs (the grid overflows)")]
-    TooManyJobs { origin: String },
+    /// `plan.json` would pass the sweep plan's size cap.
+    #[error("{}: the plan is larger than the {cap} bytes allowed (the jobs' values are too large)", path.display())]
+    PlanTooLarge { path: PathBuf, cap: u64 },
     #[error("cannot encode {what}")]
     Encode {
         what: String,
@@ -116,6 +117,12 @@ pub enum JobSceneError {
 pub enum KeyError {
     #[error("must be at least 1")]
     ZeroSamples,
+    /// `samples` times the grid's lists makes more jobs than a sweep may have.
+    #[error("{count} jobs: a sweep has at most {max} (split it into several sweep files)")]
+    TooManyJobs { count: String, max: usize },
+    /// The jobs' scene documents, which are all checked before any job runs, are too large.
+    #[error("{count} jobs of {bytes}-byte scene documents: more than the {max} bytes a sweep checks (fewer jobs, or a smaller scene)")]
+    TooMuchWork { count: usize, bytes: u64, max: u64 },
     /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or too long).
     #[error("must be 1 to {} letters, digits, spaces, `-`, `_` or `.`{}", super::plan::MAX_NAME, found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
     BadName { found: Option<String> },

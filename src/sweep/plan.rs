@@ -215,14 +215,7 @@ impl Sweep {
             draws.push((key, target, draw));
         }
 
-        let mut count = file.samples;
-        for (_, _, values) in &axes {
-            count = count
-                .checked_mul(values.len())
-                .ok_or_else(|| SweepError::TooManyJobs {
-                    origin: origin.clone(),
-                })?;
-        }
+        let count = job_count(file.samples, &axes, &base).map_err(|e| key_err(e.0, e.1))?;
         let out_dir = match &file.out {
             Some(o) => dir.join(o),
             None => dir.join(format!(
@@ -401,6 +394,64 @@ impl Sweep {
     pub fn jobs(&self) -> impl Iterator<Item = Job> + '_ {
         (0..self.count).filter_map(|i| self.job(i).ok())
     }
+}
+
+/// Most jobs in one sweep (also the most completions of a Kubernetes Indexed Job); a larger
+/// dataset is several sweep files.
+pub const MAX_JOBS: usize = 100_000;
+
+/// Most bytes of job scene documents a sweep may make (jobs times the scene document's size):
+/// [`Sweep::load`] parses and validates each one, and this bounds its time (seconds).
+pub const MAX_JOB_DOCUMENTS: u64 = 256 << 20;
+
+/// Jobs of a sweep (`samples` times each grid list's length), refused above [`MAX_JOBS`] or
+/// [`MAX_JOB_DOCUMENTS`] before anything is built; the error names `samples` or `grid`.
+fn job_count(
+    samples: usize,
+    axes: &[(String, Target, Vec<Value>)],
+    base: &Value,
+) -> Result<usize, (&'static str, KeyError)> {
+    let key = if axes.is_empty() { "samples" } else { "grid" };
+    let mut count = samples as u128;
+    for (_, _, values) in axes {
+        count = count.saturating_mul(values.len() as u128);
+    }
+    if count > MAX_JOBS as u128 {
+        return Err((
+            key,
+            KeyError::TooManyJobs {
+                count: if count >= u64::MAX as u128 {
+                    "more than 2^64".into()
+                } else {
+                    count.to_string()
+                },
+                max: MAX_JOBS,
+            },
+        ));
+    }
+    let doc = serde_yaml_ng::to_string(base).map_or(0, |t| t.len()) as u64;
+    let widest: u64 = axes
+        .iter()
+        .map(|(_, _, values)| {
+            values
+                .iter()
+                .map(|v| serde_json::to_string(v).map_or(0, |t| t.len()) as u64)
+                .max()
+                .unwrap_or(0)
+        })
+        .sum();
+    let per_job = doc + widest;
+    if (count as u64).saturating_mul(per_job) > MAX_JOB_DOCUMENTS {
+        return Err((
+            key,
+            KeyError::TooMuchWork {
+                count: count as usize,
+                bytes: per_job,
+                max: MAX_JOB_DOCUMENTS,
+            },
+        ));
+    }
+    Ok(count as usize)
 }
 
 /// Longest sweep `name`.
