@@ -1938,3 +1938,98 @@ fn sweeps_are_bounded_before_any_work() {
     assert_eq!(plan["jobs"].as_array().map(Vec::len), Some(100_000));
     assert!(l.path("scene/out/jobs/099999.json").is_file());
 }
+
+// ---------------------------------------------------------------- crafted bags
+
+/// An MCAP file of a header and one chunk (`compression` "zstd" or "") whose content is
+/// `content` and whose declared uncompressed size is `declared`; no summary, no footer.
+fn crafted_bag(content: &[u8], declared: u64, compression: &str) -> Vec<u8> {
+    let record = |op: u8, body: &[u8]| {
+        let mut r = vec![op];
+        r.extend((body.len() as u64).to_le_bytes());
+        r.extend(body);
+        r
+    };
+    let string = |s: &str| {
+        let mut b = (s.len() as u32).to_le_bytes().to_vec();
+        b.extend(s.as_bytes());
+        b
+    };
+    let data = if compression == "zstd" {
+        zstd::bulk::compress(content, 3).expect("zstd")
+    } else {
+        content.to_vec()
+    };
+    let mut chunk = Vec::new();
+    chunk.extend(0u64.to_le_bytes());
+    chunk.extend(1u64.to_le_bytes());
+    chunk.extend(declared.to_le_bytes());
+    chunk.extend(0u32.to_le_bytes());
+    chunk.extend(string(compression));
+    chunk.extend((data.len() as u64).to_le_bytes());
+    chunk.extend(&data);
+    let mut header = string("ros2");
+    header.extend(string("hostile"));
+    let mut f = b"\x89MCAP0\r\n".to_vec();
+    f.extend(record(0x01, &header));
+    f.extend(record(0x06, &chunk));
+    f
+}
+
+/// A message record header declaring `len` bytes, then a few bytes of it.
+fn message_head(len: u64) -> Vec<u8> {
+    let mut c = vec![0x05];
+    c.extend(len.to_le_bytes());
+    c.extend([0u8; 22]);
+    c
+}
+
+#[test]
+fn lengths_inside_compressed_chunks_are_checked_before_allocating() {
+    let l = Layout::new();
+    let scene = l.robot("package://pkg/meshes/m.stl", "");
+    for (name, bytes, want) in [
+        (
+            "2^40-byte record in a zstd chunk",
+            crafted_bag(&message_head(1 << 40), 31, "zstd"),
+            "but only 22",
+        ),
+        (
+            "2^40-byte record in a zstd chunk declaring 2^41 bytes",
+            crafted_bag(&message_head(1 << 40), 1 << 41, "zstd"),
+            "more than the",
+        ),
+        (
+            "200 MiB record cut short in a zstd chunk declaring 2^41 bytes",
+            crafted_bag(&message_head(200 << 20), 1 << 41, "zstd"),
+            "ends after",
+        ),
+        (
+            "2^40-byte record in an uncompressed chunk",
+            crafted_bag(&message_head(1 << 40), 31, ""),
+            "but only 22",
+        ),
+    ] {
+        let bag = l.write("scene/crafted.mcap", &bytes);
+        let png = l.path("scene/x.png");
+        let before = l.hashes();
+        let o = run(&os(&["render", s(&bag), "--out", s(&png)]));
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["crafted.mcap", "chunk 0", want]),
+        );
+        let o = record(&scene, &l.path("scene/out.mcap"), &["--joints", s(&bag)]);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["crafted.mcap", "chunk 0", want]),
+        );
+        assert!(report_only() || !png.exists());
+    }
+    assert!(crafted_bag(&message_head(1 << 40), 31, "zstd").len() < 300);
+}

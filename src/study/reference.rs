@@ -192,3 +192,51 @@ fn read(path: &Path, head: &str, samples: usize) -> Result<Option<Reference>, St
         cached: true,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cache(dir: &Path, head: &str, fields: &str, body: &[f64]) -> PathBuf {
+        let p = dir.join("c.ref");
+        let mut bytes = format!("{head} {fields}\n").into_bytes();
+        for v in body {
+            bytes.extend(v.to_le_bytes());
+        }
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    #[test]
+    fn hostile_caches_are_refused_or_recomputed() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "drape-study-reference v2 scene=x";
+        // Two samples of one vertex: energy, x, y, z each.
+        let good = [1.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.5];
+        let p = cache(dir.path(), head, "level=3 vertices=1", &good);
+        let r = read(&p, head, 2).unwrap().unwrap();
+        assert_eq!(r.trajectory.positions[1][0].z, 0.5);
+        // A NaN sample is an error naming the file and the sample.
+        let mut nan = good;
+        nan[7] = f64::NAN;
+        let p = cache(dir.path(), head, "level=3 vertices=1", &nan);
+        let e = read(&p, head, 2).unwrap_err().to_string();
+        assert!(
+            e.contains("c.ref") && e.contains("vertex 0 of sample 1"),
+            "{e}"
+        );
+        // A header claiming 2^61 vertices neither panics nor allocates: recomputed.
+        let p = cache(
+            dir.path(),
+            head,
+            "level=3 vertices=2305843009213693952",
+            &good,
+        );
+        assert!(read(&p, head, 2).unwrap().is_none());
+        // A FIFO or a device in its place is refused, not read.
+        let e = read(Path::new("/dev/zero"), head, 2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("/dev/zero"), "{e}");
+    }
+}

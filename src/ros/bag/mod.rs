@@ -2,6 +2,7 @@
 //! reading typed messages back (e.g. `/joint_states` to drive a robot).
 
 mod error;
+pub mod lengths;
 mod read;
 mod write;
 

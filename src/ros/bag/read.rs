@@ -38,6 +38,7 @@ pub fn read_topic<M: RosMessage + DeserializeOwned>(
             path: path.to_path_buf(),
         });
     }
+    super::lengths::check_chunks(path, &bytes)?;
     let options = mcap::read::Options::IgnoreEndMagic.into();
     let stream = mcap::MessageStream::new_with_options(&bytes, options).map_err(|source| {
         BagError::Mcap {
