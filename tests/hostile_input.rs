@@ -2033,3 +2033,56 @@ fn lengths_inside_compressed_chunks_are_checked_before_allocating() {
     }
     assert!(crafted_bag(&message_head(1 << 40), 31, "zstd").len() < 300);
 }
+
+// ---------------------------------------------------------------- sweep inputs
+
+#[test]
+fn sweep_inputs_follow_the_input_rules() {
+    let l = Layout::new();
+    let zero = Path::new("/dev/zero");
+    let fifo = l.fifo("scene/f.yaml");
+    // The sweep file itself.
+    for (p, what) in [(fifo.as_path(), "FIFO"), (zero, "character device")] {
+        let before = l.hashes();
+        let o = run(&os(&["sweep", "plan", s(p)]));
+        judge("sweep file", &l, &before, &o, Expect::Error(&[s(p), what]));
+        let o = run(&os(&["sweep", "run", s(p), "--index", "0"]));
+        judge("sweep file", &l, &before, &o, Expect::Error(&[s(p), what]));
+    }
+    // Its scene.
+    for (p, what) in [(fifo.as_path(), "FIFO"), (zero, "character device")] {
+        l.scene(SCENE);
+        let sweep = l.write("scene/s.yaml", format!("name: s\nscene: {}\n", s(p)));
+        let before = l.hashes();
+        let o = run(&os(&["sweep", "plan", s(&sweep)]));
+        judge(
+            "scene",
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["s.yaml", "scene", s(p), what]),
+        );
+    }
+    // The output folder's plan and job records, under collect.
+    let sweep = sweep_yaml(&l, "samples: 2\n");
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let out = l.path("scene/out");
+    std::fs::remove_file(out.join("jobs/000000.json")).expect("rm");
+    l.symlink(zero, "scene/out/jobs/000000.json");
+    l.fifo("scene/out/jobs/000001.json");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge("job records", &l, &before, &o, Expect::Ok);
+    std::fs::rename(out.join("plan.json"), out.join("plan.old")).expect("mv");
+    l.symlink(zero, "scene/out/plan.json");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan.json",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "character device"]),
+    );
+}
