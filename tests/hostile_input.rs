@@ -2086,3 +2086,128 @@ fn sweep_inputs_follow_the_input_rules() {
         Expect::Error(&["plan.json", "character device"]),
     );
 }
+
+// ---------------------------------------------------------------- limits and extents
+
+#[test]
+fn joint_limits_are_finite_ordered_and_not_negative() {
+    for (name, limit, attribute) in [
+        (
+            "lower NaN",
+            r#"lower="nan" upper="1" effort="1" velocity="1""#,
+            "lower",
+        ),
+        (
+            "lower above upper",
+            r#"lower="2" upper="1" effort="1" velocity="1""#,
+            "lower",
+        ),
+        (
+            "negative velocity",
+            r#"lower="-1" upper="1" effort="1" velocity="-3""#,
+            "velocity",
+        ),
+        (
+            "infinite effort",
+            r#"lower="-1" upper="1" effort="inf" velocity="1""#,
+            "effort",
+        ),
+        (
+            "upper 1e300",
+            r#"lower="-1" upper="1e300" effort="1" velocity="1""#,
+            "upper",
+        ),
+    ] {
+        let l = Layout::new();
+        l.robot("package://pkg/meshes/m.stl", "");
+        let text = std::fs::read_to_string(l.path("scene/pkg/urdf/robot.urdf"))
+            .expect("urdf")
+            .replace(r#"lower="-1" upper="1" effort="1" velocity="1""#, limit);
+        l.write("scene/pkg/urdf/robot.urdf", text);
+        let scene = l.path("scene/scene.yaml");
+        let before = l.hashes();
+        let want = ["robot.urdf", "joint `j`", &format!("<limit {attribute}=")];
+        let o = check(&scene);
+        judge(name, &l, &before, &o, Expect::Error(&want));
+        let o = record(&scene, &l.path("scene/out.mcap"), &[]);
+        judge(name, &l, &before, &o, Expect::Error(&want));
+    }
+}
+
+/// A Collada square of half-width `half` (m) at the origin.
+fn square_dae(half: &str) -> String {
+    format!(
+        r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="12">-{half} -{half} 0 {half} -{half} 0 {half} {half} 0 -{half} {half} 0</float_array>
+      <technique_common><accessor source="#pa" count="4" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="2"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 0 2 3</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##
+    )
+}
+
+#[test]
+fn mesh_extents_and_scales_are_bounded() {
+    let stl_far = TETRA.replacen("vertex 0.1 0 0", "vertex 3.4e38 0 0", 1);
+    for (name, file, body, scale, want) in [
+        (
+            "Collada floor at 1e20 m",
+            "far.dae",
+            square_dae("1e20"),
+            "1 1 1",
+            "beyond",
+        ),
+        (
+            "STL vertex at 3.4e38",
+            "far.stl",
+            stl_far,
+            "1 1 1",
+            "beyond",
+        ),
+        (
+            "scale 1e30",
+            "m2.stl",
+            TETRA.to_string(),
+            "1e30 1 1",
+            "scale",
+        ),
+        (
+            "scale 1e-320",
+            "m2.stl",
+            TETRA.to_string(),
+            "1 1e-320 1",
+            "scale",
+        ),
+    ] {
+        let l = Layout::new();
+        l.write(&format!("scene/pkg/meshes/{file}"), &body);
+        let mesh = format!(r#"package://pkg/meshes/{file}" scale="{scale}"#);
+        let scene = l.robot(&mesh, "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&[file, "link `arm`", want]),
+        );
+    }
+    // Within the bounds: a 100 km floor and a millimetre scale load.
+    let l = Layout::new();
+    l.write("scene/pkg/meshes/floor.dae", square_dae("1e5"));
+    let scene = l.robot(
+        r#"package://pkg/meshes/floor.dae" scale="0.001 0.001 0.001"#,
+        "",
+    );
+    let before = l.hashes();
+    judge("valid extents", &l, &before, &check(&scene), Expect::Ok);
+}

@@ -13,8 +13,17 @@ pub struct TriMeshData {
     pub indices: Vec<[u32; 3]>,
 }
 
+/// Farthest a mesh vertex may lie from the origin on any axis (m), after scaling: a thousand
+/// kilometres, far beyond any robot or workcell, and small enough that contact arithmetic on
+/// such coordinates keeps sub-millimetre precision.
+pub const MAX_COORDINATE: f64 = 1e6;
+/// Smallest magnitude of a mesh scale component (a file in nanometres would need 1e-9).
+pub const MIN_SCALE: f64 = 1e-9;
+/// Largest magnitude of a mesh scale component.
+pub const MAX_SCALE: f64 = 1e6;
+
 /// Checks the invariants every consumer relies on: at least one triangle, indices in range,
-/// finite coordinates.
+/// finite coordinates within [`MAX_COORDINATE`].
 pub fn validate(path: &Path, mesh: &TriMeshData) -> Result<(), MeshError> {
     if mesh.indices.is_empty() || mesh.vertices.is_empty() {
         return Err(MeshError::Empty {
@@ -25,6 +34,14 @@ pub fn validate(path: &Path, mesh: &TriMeshData) -> Result<(), MeshError> {
         return Err(MeshError::NonFinite {
             path: path.to_path_buf(),
             index,
+        });
+    }
+    let far = |v: &Vec3| v.abs().max_element() > MAX_COORDINATE;
+    if let Some(index) = mesh.vertices.iter().position(far) {
+        return Err(MeshError::TooFar {
+            path: path.to_path_buf(),
+            index,
+            value: mesh.vertices[index].abs().max_element(),
         });
     }
     validate_indices(path, mesh)

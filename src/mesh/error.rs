@@ -75,6 +75,12 @@ pub enum MeshError {
     },
     #[error("mesh {path}: vertex {index} has a non-finite coordinate")]
     NonFinite { path: PathBuf, index: usize },
-    #[error("mesh {path}: scale {scale} must be finite and non-zero on every axis")]
+    #[error("mesh {path}: vertex {index} is {value:e} m from the origin on one axis, beyond the {max:e} m allowed", max = super::MAX_COORDINATE)]
+    TooFar {
+        path: PathBuf,
+        index: usize,
+        value: f64,
+    },
+    #[error("mesh {path}: scale [{:?}, {:?}, {:?}] must be finite, with every component between {min:e} and {max:e} in size", scale.x, scale.y, scale.z, min = super::MIN_SCALE, max = super::MAX_SCALE)]
     BadScale { path: PathBuf, scale: Vec3 },
 }
