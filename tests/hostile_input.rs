@@ -2211,3 +2211,36 @@ fn mesh_extents_and_scales_are_bounded() {
     let before = l.hashes();
     judge("valid extents", &l, &before, &check(&scene), Expect::Ok);
 }
+
+// ---------------------------------------------------------------- node start-up
+
+#[test]
+fn malformed_remaps_are_errors_before_the_node_starts() {
+    let l = Layout::new();
+    // A parameters file that does not exist: a remap that slipped through would fail on it
+    // instead of starting a DDS participant.
+    let params = l.path("scene/none.yaml");
+    for (name, remap, want) in [
+        ("empty namespace token", "__ns:=/a//b", "no empty token"),
+        ("relative namespace", "__ns:=a", "starts with `/`"),
+        ("trailing slash", "__ns:=/a/", "trailing"),
+        (
+            "namespace token with a digit first",
+            "__ns:=/a/9b",
+            "tokens",
+        ),
+        ("node name with a slash", "__node:=a/b", "node name"),
+        ("empty node name", "__node:=", "node name"),
+    ] {
+        let before = l.hashes();
+        let o = run(&os(&[
+            "node",
+            "--params",
+            s(&params),
+            "--ros-args",
+            "-r",
+            remap,
+        ]));
+        judge(name, &l, &before, &o, Expect::Error(&[remap, want]));
+    }
+}

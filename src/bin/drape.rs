@@ -485,6 +485,14 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
     use std::sync::Arc;
 
     let ra = parse_ros_args(&ros_args)?;
+    // Checked here, before any DDS participant exists: ros2-client accepts some malformed
+    // names at first and fails on them later.
+    if let Some(ns) = &ra.namespace {
+        check_ros_name(ns, true).map_err(|why| anyhow::anyhow!("-r __ns:={ns}: {why}"))?;
+    }
+    if let Some(n) = &ra.node_name {
+        check_ros_name(n, false).map_err(|why| anyhow::anyhow!("-r __node:={n}: {why}"))?;
+    }
     let name = ra.node_name.clone().unwrap_or_else(|| "drape".to_string());
     let file = ra.params_files.last().cloned().or(params).ok_or_else(|| {
         anyhow::anyhow!("no parameters: pass --params FILE or --ros-args --params-file FILE")
@@ -494,6 +502,10 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         p.namespace = ns;
     }
     p.apply_overrides(&ra.overrides)?;
+    check_ros_name(&p.namespace, true)
+        .map_err(|why| anyhow::anyhow!("{}: namespace {:?}: {why}", file.display(), p.namespace))?;
+    check_ros_name(&p.name, false)
+        .map_err(|why| anyhow::anyhow!("{}: node name {:?}: {why}", file.display(), p.name))?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     // The stop flag ends the run loop; the cancellation flag ends a scene build in progress
@@ -510,4 +522,33 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         s.joint_states_received
     );
     Ok(())
+}
+
+/// A ROS 2 namespace (`/`, or `/` then tokens joined by single `/`, no trailing `/`) or node
+/// name (one token); a token is a letter or `_`, then letters, digits and `_`.
+#[cfg(feature = "ros")]
+fn check_ros_name(name: &str, namespace: bool) -> std::result::Result<(), &'static str> {
+    let token = |t: &str| {
+        let mut c = t.chars();
+        matches!(c.next(), Some(f) if f.is_ascii_alphabetic() || f == '_')
+            && c.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    if !namespace {
+        return if token(name) {
+            Ok(())
+        } else {
+            Err("a node name is a letter or `_` then letters, digits and `_`")
+        };
+    }
+    if name == "/" {
+        return Ok(());
+    }
+    let Some(rest) = name.strip_prefix('/') else {
+        return Err("a namespace starts with `/`");
+    };
+    if rest.split('/').all(token) {
+        Ok(())
+    } else {
+        Err("a namespace is `/`-separated tokens (a letter or `_` then letters, digits and `_`), with no empty token (`//`) and no trailing `/`")
+    }
 }
