@@ -23,6 +23,8 @@ const MEMORY_LIMIT: u64 = 200 << 20;
 const BUDGET: Duration = Duration::from_secs(2);
 const SLACK: u32 = 3;
 const KILL_AFTER: Duration = Duration::from_secs(10);
+/// Budget of a large input that must still succeed (or be refused by a documented limit).
+const LARGE_BUDGET: Duration = Duration::from_secs(20);
 
 #[path = "common/tiny_scene.rs"]
 mod tiny_scene;
@@ -200,6 +202,10 @@ fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
 /// [`drape`] with a limit on the size of any file the child writes (`RLIMIT_FSIZE`: a write
 /// past it fails with `EFBIG`, as on a full disk; `SIGXFSZ` is ignored so the write returns).
 fn drape_limited(args: &[&std::ffi::OsStr], file_size: Option<u64>) -> Outcome {
+    drape_with(args, file_size, KILL_AFTER)
+}
+
+fn drape_with(args: &[&std::ffi::OsStr], file_size: Option<u64>, kill_after: Duration) -> Outcome {
     let mut cmd = Command::new(binary());
     cmd.args(args)
         .env("RUST_LOG", "error")
@@ -243,11 +249,11 @@ fn drape_limited(args: &[&std::ffi::OsStr], file_size: Option<u64>) -> Outcome {
         if let Some(s) = child.try_wait().expect("wait") {
             break s;
         }
-        if start.elapsed() > KILL_AFTER {
+        if start.elapsed() > kill_after {
             let _ = child.kill();
             let s = child.wait().expect("wait");
             if !report_only() {
-                panic!("drape {args:?} still running after {KILL_AFTER:?}; killed ({s})");
+                panic!("drape {args:?} still running after {kill_after:?}; killed ({s})");
             }
             break s;
         }
@@ -328,7 +334,19 @@ enum Expect<'a> {
 
 /// The common assertions of every case.
 fn judge(name: &str, l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) {
-    let failures = verdict(l, before, o, want);
+    judge_within(name, l, before, o, want, BUDGET)
+}
+
+/// [`judge`] with another time budget (a large input that must still succeed).
+fn judge_within(
+    name: &str,
+    l: &Layout,
+    before: &BTreeMap<PathBuf, u64>,
+    o: &Outcome,
+    want: Expect,
+    budget: Duration,
+) {
+    let failures = verdict(l, before, o, want, budget);
     let err = o.stderr.trim().replace('\n', "\n    ");
     if failures.is_empty() {
         eprintln!("{name}: ok in {:?}\n    {err}", o.elapsed);
@@ -339,7 +357,13 @@ fn judge(name: &str, l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, w
     }
 }
 
-fn verdict(l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) -> Vec<String> {
+fn verdict(
+    l: &Layout,
+    before: &BTreeMap<PathBuf, u64>,
+    o: &Outcome,
+    want: Expect,
+    budget: Duration,
+) -> Vec<String> {
     let mut f = Vec::new();
     let err = &o.stderr;
     if let Some(s) = o.signal {
@@ -348,8 +372,8 @@ fn verdict(l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expec
     if err.contains("panicked") {
         f.push("panicked".into());
     }
-    if o.elapsed >= BUDGET * SLACK {
-        f.push(format!("took {:?} (budget {BUDGET:?})", o.elapsed));
+    if o.elapsed >= budget * SLACK {
+        f.push(format!("took {:?} (budget {budget:?})", o.elapsed));
     }
     match want {
         Expect::Ok => {
@@ -2243,4 +2267,104 @@ fn malformed_remaps_are_errors_before_the_node_starts() {
         ]));
         judge(name, &l, &before, &o, Expect::Error(&[remap, want]));
     }
+}
+
+// ---------------------------------------------------------------- render memory
+
+/// A bag of `frames` cloth frames (two triangles each, moving) at 30 Hz.
+fn long_bag(path: &Path, frames: u64) {
+    use drape::ros::msg::{Marker, Point};
+    let mut bag = BagWriter::create(path).expect("bag");
+    let t = bag
+        .add_topic::<Marker>("/drape/mesh", Distro::Jazzy, None)
+        .expect("topic");
+    for k in 0..frames {
+        let z = 1.0 + 0.1 * (k as f64 * 0.01).sin();
+        let p = |x: f64, y: f64| Point { x, y, z };
+        let m = Marker {
+            r#type: Marker::TRIANGLE_LIST,
+            points: vec![
+                p(0., 0.),
+                p(0.2, 0.),
+                p(0.2, 0.2),
+                p(0., 0.),
+                p(0.2, 0.2),
+                p(0., 0.2),
+            ],
+            ..Marker::default()
+        };
+        bag.write(t, k * 33_333_333, &m).expect("write");
+    }
+    bag.finish().expect("finish");
+}
+
+#[test]
+fn render_memory_does_not_grow_with_frames() {
+    let l = Layout::new();
+    let bag = l.path("scene/long.mcap");
+    long_bag(&bag, 12_000);
+    // Held whole, these 12,000 tiles of 96x96 would take 330 MB (the child may use 200 MB).
+    let gif = l.path("scene/long.gif");
+    let before = l.hashes();
+    let a = os(&["render", s(&bag), "--out", s(&gif), "--size", "96x96"]);
+    let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    let o = drape_with(&a, None, LARGE_BUDGET * SLACK);
+    judge_within(
+        "12,000-frame GIF",
+        &l,
+        &before,
+        &o,
+        Expect::Ok,
+        LARGE_BUDGET,
+    );
+    let bytes = std::fs::read(&gif).unwrap_or_default();
+    let frames = bytes.windows(2).filter(|w| w == &[0x21, 0xF9]).count();
+    assert!(report_only() || frames >= 12_000, "{frames} frame headers");
+    // Two bags side by side, and a strip and the last frame as PNG sheets.
+    for (k, args) in [
+        vec![
+            "render",
+            s(&bag),
+            s(&bag),
+            "--size",
+            "32x32",
+            "--frames",
+            "50",
+            "--out",
+        ],
+        vec!["render", s(&bag), "--frames", "8", "--out"],
+        vec!["render", s(&bag), "--at", "300,1,100", "--out"],
+        vec!["render", s(&bag), "--out"],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = l.path(&format!(
+            "scene/t{k}.{}",
+            if k == 0 { "gif" } else { "png" }
+        ));
+        let before = l.hashes();
+        let mut args = os(&args);
+        args.push(out.clone().into_os_string());
+        let o = run(&args);
+        judge("long bag", &l, &before, &o, Expect::Ok);
+    }
+    let png = l.path("scene/big.png");
+    // A sheet of more tiles than it may hold is refused before any is drawn.
+    let before = l.hashes();
+    let o = run(&os(&[
+        "render",
+        s(&bag),
+        "--out",
+        s(&png),
+        "--frames",
+        "1000000",
+    ]));
+    judge(
+        "huge sheet",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["tiles", "--frames"]),
+    );
 }

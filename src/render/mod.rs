@@ -8,6 +8,7 @@
 //! [`raster`]; tiles are laid out in a grid (bags side by side by default, or the frames of one
 //! bag as a strip). A `.gif` output animates the frames instead.
 
+mod animation;
 mod marker;
 pub mod obstacles;
 pub mod raster;
@@ -87,6 +88,13 @@ pub enum RenderError {
     /// The picture would overwrite an input, or cannot be written whole.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    /// More tiles than a PNG sheet holds (`--frames`, `--at` or many bags).
+    #[error("{tiles} tiles of {width}x{height} pixels: more than the {max} pixels a sheet may have (fewer --frames or --at times, or a smaller --size)", max = MAX_SHEET_PIXELS)]
+    SheetTooLarge {
+        tiles: usize,
+        width: usize,
+        height: usize,
+    },
     #[error("tile size {width}x{height} is out of range (at most 16 million pixels)")]
     TileSize { width: usize, height: usize },
     #[error("no bag to render")]
@@ -118,68 +126,145 @@ pub struct Frame {
     pub planes: Vec<(Vec3, Vec3)>,
 }
 
-/// The frames of a bag to draw.
-pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderError> {
-    let pick = &o.pick;
-    let mesh = read_topic::<MarkerHead>(bag, "/drape/mesh")?;
-    if mesh.messages.is_empty() {
-        return Err(RenderError::Empty {
-            path: bag.to_path_buf(),
-        });
-    }
-    let n = mesh.messages.len();
-    let t0 = mesh.messages[0].0;
-    let chosen: Vec<usize> = match pick {
-        Pick::Last => vec![n - 1],
-        Pick::All => (0..n).collect(),
-        Pick::Spread(k) => {
-            let k = (*k).clamp(1, n);
-            if k == 1 {
-                vec![n - 1]
-            } else {
-                (0..k).map(|i| i * (n - 1) / (k - 1)).collect()
+/// Most pixels of a PNG sheet (all its tiles): about 100 MB of RGB held at once.
+pub const MAX_SHEET_PIXELS: usize = 32 << 20;
+
+/// A bag opened for drawing: its bytes, the times of its cloth frames, and the robot and the
+/// scene obstacles (small beside the cloth, read whole). Cloth markers are decoded only when
+/// a frame is drawn, so memory does not grow with the number of frames.
+pub(super) struct Source {
+    pub bag: crate::ros::bag::BagBytes,
+    pub times: Vec<u64>,
+    robot: Option<(shapes::RobotShapes, TfSeries)>,
+    obstacles: Vec<(u64, MarkerHead)>,
+}
+
+impl Source {
+    pub fn open(bag: &Path, o: &RenderOptions) -> Result<Source, RenderError> {
+        let bytes = crate::ros::bag::BagBytes::read(bag)?;
+        let mut times = Vec::new();
+        for m in bytes.topic::<MarkerHead>("/drape/mesh")? {
+            times.push(m?.0);
+        }
+        if times.is_empty() {
+            // The same checks and messages as a whole read (no such topic, truncated, empty).
+            let mesh = read_topic::<MarkerHead>(bag, "/drape/mesh")?;
+            if mesh.messages.is_empty() {
+                return Err(RenderError::Empty {
+                    path: bag.to_path_buf(),
+                });
             }
         }
-        Pick::Times(ts) => ts
-            .iter()
-            .map(|t| {
-                let target = t0 as f64 + t * 1e9;
-                (0..n)
-                    .min_by(|&a, &b| {
-                        let da = (mesh.messages[a].0 as f64 - target).abs();
-                        let db = (mesh.messages[b].0 as f64 - target).abs();
-                        da.total_cmp(&db)
-                    })
-                    .unwrap_or(n - 1)
-            })
-            .collect(),
-    };
-    let robot_shapes = if o.robot {
-        robot_of(bag, &o.package_paths)
-    } else {
-        None
-    };
-    // A bag without scene obstacles has no such topic.
-    let scene_obstacles = read_topic::<MarkerHead>(bag, "/drape/obstacles")
-        .map(|t| t.messages)
-        .unwrap_or_default();
-    let mut frames = Vec::new();
-    for i in chosen {
-        let (t, m) = &mesh.messages[i];
+        let robot = if o.robot {
+            robot_of(bag, &o.package_paths)
+        } else {
+            None
+        };
+        // A bag without scene obstacles has no such topic.
+        let obstacles = read_topic::<MarkerHead>(bag, "/drape/obstacles")
+            .map(|t| t.messages)
+            .unwrap_or_default();
+        Ok(Source {
+            bag: bytes,
+            times,
+            robot,
+            obstacles,
+        })
+    }
+
+    /// The frames `pick` chooses, as indices into [`Source::times`].
+    pub fn chosen(&self, pick: &Pick) -> Vec<usize> {
+        let n = self.times.len();
+        let t0 = self.times[0];
+        match pick {
+            Pick::Last => vec![n - 1],
+            Pick::All => (0..n).collect(),
+            Pick::Spread(k) => {
+                let k = (*k).clamp(1, n);
+                if k == 1 {
+                    vec![n - 1]
+                } else {
+                    (0..k).map(|i| i * (n - 1) / (k - 1)).collect()
+                }
+            }
+            Pick::Times(ts) => ts
+                .iter()
+                .map(|t| {
+                    let target = t0 as f64 + t * 1e9;
+                    (0..n)
+                        .min_by(|&a, &b| {
+                            let da = (self.times[a] as f64 - target).abs();
+                            let db = (self.times[b] as f64 - target).abs();
+                            da.total_cmp(&db)
+                        })
+                        .unwrap_or(n - 1)
+                })
+                .collect(),
+        }
+    }
+
+    /// The frame of cloth marker `m` at `t`: the cloth, the robot at its poses, the obstacles.
+    pub fn frame(&self, t: u64, m: &MarkerHead) -> Frame {
         let mut meshes = vec![cloth_mesh(m)];
-        if let Some((shapes, tf)) = &robot_shapes {
-            let poses = tf_at(tf, *t);
+        if let Some((shapes, tf)) = &self.robot {
+            let poses = tf_at(tf, t);
             meshes.extend(shapes.meshes(&poses));
         }
-        let o = obstacles::at(&scene_obstacles, *t);
+        let o = obstacles::at(&self.obstacles, t);
         meshes.extend(o.meshes);
-        frames.push(Frame {
-            time_ns: *t,
+        Frame {
+            time_ns: t,
             meshes,
             planes: o.planes,
+        }
+    }
+
+    /// The cloth markers at `indices` (ascending, no repeats), decoded in one pass.
+    pub fn markers(
+        &self,
+        indices: &[usize],
+        mut each: impl FnMut(usize, u64, MarkerHead) -> Result<(), RenderError>,
+    ) -> Result<(), RenderError> {
+        let mut want = indices.iter().copied().peekable();
+        for (k, m) in self.bag.topic::<MarkerHead>("/drape/mesh")?.enumerate() {
+            let Some(&next) = want.peek() else { break };
+            let (t, m) = m?;
+            if k == next {
+                want.next();
+                each(k, t, m)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The frames of a bag to draw (only the picked markers are decoded and kept).
+pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderError> {
+    let src = Source::open(bag, o)?;
+    let chosen = src.chosen(&o.pick);
+    if chosen
+        .len()
+        .saturating_mul(o.width.saturating_mul(o.height))
+        > MAX_SHEET_PIXELS
+    {
+        return Err(RenderError::SheetTooLarge {
+            tiles: chosen.len(),
+            width: o.width,
+            height: o.height,
         });
     }
-    Ok(frames)
+    let mut unique = chosen.clone();
+    unique.sort_unstable();
+    unique.dedup();
+    let mut frames: HashMap<usize, Frame> = HashMap::new();
+    src.markers(&unique, |k, t, m| {
+        frames.insert(k, src.frame(t, &m));
+        Ok(())
+    })?;
+    Ok(chosen
+        .iter()
+        .filter_map(|k| frames.get(k).cloned())
+        .collect())
 }
 
 /// The marker's triangle soup welded by exact position (the recorder writes each vertex's
@@ -254,26 +339,50 @@ fn tf_at(tf: &TfSeries, t: u64) -> HashMap<String, Pose> {
     out
 }
 
-/// Bounding sphere of the meshes of some frames (planes left out: unbounded): what each
-/// tile's camera frames.
-pub fn bounds(frames: &[Frame]) -> (Vec3, f64) {
-    let mut lo = Vec3::splat(f64::INFINITY);
-    let mut hi = Vec3::splat(f64::NEG_INFINITY);
-    for f in frames {
+/// The box around the meshes of frames added one at a time (planes left out: unbounded).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Extent {
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Extent {
+    pub fn new() -> Extent {
+        Extent {
+            lo: Vec3::splat(f64::INFINITY),
+            hi: Vec3::splat(f64::NEG_INFINITY),
+        }
+    }
+
+    pub fn add(&mut self, f: &Frame) {
         for m in &f.meshes {
             for p in &m.positions {
                 if p.is_finite() {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
+                    self.lo = self.lo.min(*p);
+                    self.hi = self.hi.max(*p);
                 }
             }
         }
     }
-    if !lo.is_finite() {
-        return (Vec3::ZERO, 1.0);
+
+    /// Centre and radius of the bounding sphere (a unit sphere at the origin when empty).
+    pub fn sphere(&self) -> (Vec3, f64) {
+        if !self.lo.is_finite() {
+            return (Vec3::ZERO, 1.0);
+        }
+        let c = (self.lo + self.hi) / 2.0;
+        (c, ((self.hi - self.lo).length() / 2.0).max(0.05))
     }
-    let c = (lo + hi) / 2.0;
-    (c, ((hi - lo).length() / 2.0).max(0.05))
+}
+
+/// Bounding sphere of the meshes of some frames (planes left out: unbounded): what each
+/// tile's camera frames.
+pub fn bounds(frames: &[Frame]) -> (Vec3, f64) {
+    let mut e = Extent::new();
+    for f in frames {
+        e.add(f);
+    }
+    e.sphere()
 }
 
 /// Draws one frame as one tile, with a camera framing `bounds`.
@@ -305,8 +414,17 @@ pub fn tiles(bags: &[PathBuf], o: &RenderOptions) -> Result<Vec<Vec<Image>>, Ren
         });
     }
     let mut out = Vec::new();
+    let mut count = 0usize;
     for bag in bags {
         let frames = read_frames(bag, o)?;
+        count += frames.len();
+        if count.saturating_mul(o.width * o.height) > MAX_SHEET_PIXELS {
+            return Err(RenderError::SheetTooLarge {
+                tiles: count,
+                width: o.width,
+                height: o.height,
+            });
+        }
         let b = bounds(&frames);
         out.push(frames.iter().map(|f| draw_frame(f, b, o)).collect());
     }
@@ -330,7 +448,8 @@ pub fn sheet(tiles: &[Vec<Image>], o: &RenderOptions) -> Image {
 }
 
 /// Renders `bags` to `out`: a PNG sheet of the picked frames, or for `.gif` an animation of the
-/// frames (all frames unless picked otherwise) with the bags side by side.
+/// frames (all frames unless picked otherwise) with the bags side by side, drawn and encoded one
+/// frame at a time.
 pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), RenderError> {
     if bags.is_empty() {
         return Err(RenderError::NoBags);
@@ -345,38 +464,11 @@ pub fn render(bags: &[PathBuf], out: &Path, o: &RenderOptions) -> Result<(), Ren
         source,
     };
     if gif {
-        let mut opts = o.clone();
-        if opts.pick == Pick::Last {
-            opts.pick = Pick::All;
-        }
-        let t = tiles(bags, &opts)?;
-        let n = t.iter().map(Vec::len).min().unwrap_or(0);
-        let frames: Vec<Image> = (0..n)
-            .map(|i| {
-                let row: Vec<Vec<Image>> = t.iter().map(|b| vec![b[i].clone()]).collect();
-                sheet(
-                    &row,
-                    &RenderOptions {
-                        columns: Some(bags.len()),
-                        ..opts.clone()
-                    },
-                )
-            })
-            .collect();
-        let times = read_topic::<MarkerHead>(&bags[0], "/drape/mesh")?;
-        let period_ns = times
-            .messages
-            .windows(2)
-            .next()
-            .map_or(33_333_333, |w| w[1].0.saturating_sub(w[0].0));
-        let stride = match &opts.pick {
-            Pick::Spread(k) if *k > 1 => (times.messages.len().saturating_sub(1)) / (k - 1),
-            _ => 1,
-        }
-        .max(1);
-        let delay_cs = ((period_ns as f64 * stride as f64) / 1e7).round().max(2.0) as u16;
         let mut file = crate::output::Output::create(out, &inputs)?;
-        write_gif(&mut file, &frames, delay_cs).map_err(write_err)?;
+        animation::render_gif(bags, &mut file, o).map_err(|e| match e {
+            animation::GifError::Render(r) => r,
+            animation::GifError::Write(w) => write_err(w),
+        })?;
         Ok(file.finish()?)
     } else {
         let t = tiles(bags, o)?;

@@ -7,5 +7,5 @@ mod read;
 mod write;
 
 pub use error::BagError;
-pub use read::{read_joint_states, read_topic, TopicRead};
+pub use read::{read_joint_states, read_topic, BagBytes, TopicIter, TopicRead};
 pub use write::{BagWriter, TopicId};
