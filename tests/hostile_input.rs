@@ -2368,3 +2368,147 @@ fn render_memory_does_not_grow_with_frames() {
         Expect::Error(&["tiles", "--frames"]),
     );
 }
+
+// ---------------------------------------------------------------- collect and job locks
+
+/// The manifest's entries by index: (status, error).
+fn manifest(out: &Path) -> Vec<(String, String)> {
+    std::fs::read_to_string(out.join("manifest.jsonl"))
+        .expect("manifest")
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json line");
+            (
+                v["status"].as_str().unwrap_or("").to_string(),
+                v["error"].as_str().unwrap_or("").to_string(),
+            )
+        })
+        .collect()
+}
+
+fn edit_json(path: &Path, f: impl FnOnce(&mut serde_json::Value)) {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("json");
+    f(&mut v);
+    std::fs::write(path, serde_json::to_string(&v).expect("json")).expect("write");
+}
+
+#[test]
+fn collect_verifies_what_it_reads() {
+    let l = Layout::new();
+    let sweep = sweep_yaml(&l, "samples: 5\n");
+    let out = l.path("scene/out");
+    for i in 0..5 {
+        let o = run(&os(&[
+            "sweep",
+            "run",
+            s(&sweep),
+            "--index",
+            &i.to_string(),
+            "--quiet",
+        ]));
+        assert_eq!(o.code, Some(0), "{}", o.stderr);
+    }
+    let rec = |i: usize| out.join(format!("jobs/{i:06}.json"));
+    // Job 1's record claims job 2's index; job 2's names a bag far outside the sweep; job 3's
+    // bag is corrupted in place at the same size; job 4's record is not a record.
+    edit_json(&rec(1), |v| v["index"] = 2.into());
+    edit_json(&rec(2), |v| v["bag"] = "../../../../etc/passwd".into());
+    let bag3 = out.join("jobs/000003.mcap");
+    let mut bytes = std::fs::read(&bag3).expect("bag");
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&bag3, &bytes).expect("write");
+    std::fs::write(rec(4), "{ not json").expect("write");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge("collect", &l, &before, &o, Expect::Ok);
+    let m = manifest(&out);
+    let want = [
+        ("ok", ""),
+        ("failed", "claims job 2"),
+        ("failed", "../../../../etc/passwd"),
+        ("ok", ""),
+        ("failed", "not a job record"),
+    ];
+    for (i, (status, why)) in want.iter().enumerate() {
+        assert_eq!(m[i].0, *status, "job {i}: {:?}", m[i]);
+        assert!(m[i].1.contains(why), "job {i}: {:?}", m[i]);
+    }
+    // With --verify the corrupted bag is found.
+    let o = run(&os(&["sweep", "collect", s(&out), "--verify"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let m = manifest(&out);
+    assert_eq!(m[3].0, "failed");
+    assert!(m[3].1.contains("SHA-256"), "{:?}", m[3]);
+    assert_eq!(m[0].0, "ok");
+    // A rerun of the corrupted job redoes it instead of skipping it.
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "3", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert_ne!(
+        std::fs::read(&bag3).expect("bag"),
+        bytes,
+        "job 3 was skipped"
+    );
+
+    // A plan listing a job three times, or with a wrong job count, is refused.
+    let plan = out.join("plan.json");
+    let good = std::fs::read_to_string(&plan).expect("plan");
+    edit_json(&plan, |v| {
+        let j0 = v["jobs"][0].clone();
+        v["jobs"] = serde_json::Value::Array(vec![j0.clone(), j0.clone(), j0]);
+        v["job_count"] = 3.into();
+    });
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan with a repeated job",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "once"]),
+    );
+    std::fs::write(&plan, &good).expect("write");
+    edit_json(&plan, |v| v["job_count"] = 7.into());
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan with a wrong count",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "job_count"]),
+    );
+}
+
+#[test]
+fn one_job_runs_once_at_a_time() {
+    use std::os::unix::io::AsRawFd;
+    let l = Layout::new();
+    let sweep = sweep_yaml(&l, "samples: 2\n");
+    let out = l.path("scene/out");
+    std::fs::create_dir_all(out.join("jobs")).expect("mkdir");
+    // This process stands for a first attempt still running: it holds job 0's lock.
+    let lock = std::fs::File::create(out.join("jobs/000000.lock")).expect("lock");
+    assert_eq!(
+        unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) },
+        0
+    );
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    judge(
+        "second attempt",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["job 0", "already running", "000000.lock"]),
+    );
+    assert!(report_only() || !out.join("jobs/000000.json").exists());
+    // Another job runs meanwhile, and job 0 runs once the lock is released.
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "1", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    drop(lock);
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(out.join("jobs/000000.mcap").is_file());
+}

@@ -3,8 +3,10 @@
 //!
 //! The output folder's `plan.json` (written by every `sweep run` and `sweep emit`) says which
 //! jobs exist, so jobs that never ran appear too: `missing`, or `failed` with the reason when a
-//! partial bag or a failed record is there. An `ok` record whose bag is gone or has another size
-//! is `failed` too.
+//! partial bag or a failed record is there. The plan must list each job once, in order; an `ok`
+//! record is `failed` when it claims another job's index, names a bag other than its job's own
+//! `jobs/I.mcap`, or its bag is gone or has another size (or, with `--verify`, another
+//! SHA-256); an unreadable record is `failed` with the reason. Every `failed` entry says why.
 
 use super::error::SweepError;
 use super::job::{params_json, JobFiles, JobRecord, Status};
@@ -91,15 +93,38 @@ impl Manifest {
 
 /// Merges the job records of `out` into `manifest.jsonl` and `manifest.csv` there.
 pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
+    collect_with(out, false)
+}
+
+/// [`collect`]; with `verify`, each `ok` job's bag is also hashed and compared with the
+/// SHA-256 its record holds.
+pub fn collect_with(out: &Path, verify: bool) -> Result<Manifest, SweepError> {
     let plan_path = out.join("plan.json");
     let text = crate::input::read_text(&plan_path, crate::input::InputKind::SweepPlan)?;
     let plan: PlanFile = serde_json::from_str(&text).map_err(|source| SweepError::Json {
         origin: plan_path.display().to_string(),
         source,
     })?;
+    let bad_plan = |why: String| SweepError::BadPlan {
+        path: plan_path.clone(),
+        why,
+    };
+    if plan.jobs.len() != plan.job_count {
+        return Err(bad_plan(format!(
+            "job_count is {} but {} jobs are listed",
+            plan.job_count,
+            plan.jobs.len()
+        )));
+    }
+    if let Some((pos, job)) = plan.jobs.iter().enumerate().find(|(k, j)| j.index != *k) {
+        return Err(bad_plan(format!(
+            "entry {pos} of jobs is job {} (each job is listed once, in order)",
+            job.index
+        )));
+    }
     let mut entries = Vec::with_capacity(plan.jobs.len());
     for job in &plan.jobs {
-        entries.push(entry(out, job));
+        entries.push(entry(out, job, verify));
     }
     let jsonl = out.join("manifest.jsonl");
     let mut lines = String::new();
@@ -124,7 +149,7 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
     })
 }
 
-fn entry(out: &Path, job: &Job) -> JobRecord {
+fn entry(out: &Path, job: &Job, verify: bool) -> JobRecord {
     let files = JobFiles::new(out, job.index);
     let blank = |status, error: Option<String>| JobRecord {
         index: job.index,
@@ -136,30 +161,39 @@ fn entry(out: &Path, job: &Job) -> JobRecord {
         summary: None,
         error,
     };
-    match files.read_record() {
-        Some(mut r) if r.status == Status::Ok => {
-            let size = std::fs::metadata(&files.bag).ok().map(|m| m.len());
-            if size != r.size {
-                r.status = Status::Failed;
-                r.error = Some(match size {
-                    None => format!("its bag {} is missing", files.bag_rel),
-                    Some(s) => format!(
-                        "its bag {} has {s} bytes, the record says {:?}",
-                        files.bag_rel, r.size
-                    ),
-                });
+    match files.load_record() {
+        Ok(Some(mut r)) if r.status == Status::Ok => {
+            if let Some(why) = files.fault(&r, job.index, verify) {
+                // The entry is the plan's job, whatever the record claims.
+                r = JobRecord {
+                    summary: r.summary,
+                    ..blank(Status::Failed, Some(why))
+                };
             }
             r
         }
-        Some(r) => r,
-        None if files.part.exists() => blank(
+        Ok(Some(r)) if r.index != job.index => blank(
+            Status::Failed,
+            Some(format!(
+                "its record claims job {} (the record of job {} must say {})",
+                r.index, job.index, job.index
+            )),
+        ),
+        Ok(Some(mut r)) => {
+            if r.error.as_deref().is_none_or(str::is_empty) {
+                r.error = Some("failed (the record gives no reason)".into());
+            }
+            r
+        }
+        Err(why) => blank(Status::Failed, Some(format!("unreadable record: {why}"))),
+        Ok(None) if files.part.exists() => blank(
             Status::Failed,
             Some(format!(
                 "no result record; a partial bag {}.part is left (killed mid-run, or still running)",
                 files.bag_rel
             )),
         ),
-        None => blank(Status::Missing, None),
+        Ok(None) => blank(Status::Missing, None),
     }
 }
 

@@ -88,6 +88,12 @@ pub enum SweepError {
     /// `plan.json` would pass the sweep plan's size cap.
     #[error("{}: the plan is larger than the {cap} bytes allowed (the jobs' values are too large)", path.display())]
     PlanTooLarge { path: PathBuf, cap: u64 },
+    /// Another process runs this job now (it holds the job's lock).
+    #[error("job {index} is already running (another process holds {}); a job runs once at a time", lock.display())]
+    Busy { index: usize, lock: PathBuf },
+    /// `plan.json` does not list each job once, in order, as many as it says.
+    #[error("{}: {why}", path.display())]
+    BadPlan { path: PathBuf, why: String },
     #[error("cannot encode {what}")]
     Encode {
         what: String,

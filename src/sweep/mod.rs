@@ -21,7 +21,7 @@ pub mod plan;
 pub mod pool;
 mod rng;
 
-pub use collect::{collect, write_plan, Manifest, PlanFile};
+pub use collect::{collect, collect_with, write_plan, Manifest, PlanFile};
 pub use draw::{Draw, DrawError, RangeError, Target, TargetError};
 pub use error::{ApplyError, JobSceneError, KeyError, SweepError};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};

@@ -41,7 +41,12 @@ pub(crate) enum SweepCommand {
         quiet: bool,
     },
     /// Merge the job records of an output folder into manifest.jsonl and manifest.csv.
-    Collect { dir: PathBuf },
+    Collect {
+        dir: PathBuf,
+        /// Also hash every finished bag and compare it with its record's SHA-256.
+        #[arg(long)]
+        verify: bool,
+    },
     /// Write the files that run a sweep on a cluster scheduler.
     Emit {
         #[command(subcommand)]
@@ -231,8 +236,8 @@ pub(crate) fn sweep(command: SweepCommand) -> Result<()> {
                 }
             }
         }
-        SweepCommand::Collect { dir } => {
-            let m = sweep::collect(&dir)?;
+        SweepCommand::Collect { dir, verify } => {
+            let m = sweep::collect_with(&dir, verify)?;
             println!(
                 "{}: {} jobs, {} ok, {} failed, {} missing; wrote {} and {}",
                 dir.display(),
