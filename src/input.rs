@@ -144,8 +144,14 @@ pub fn opened() -> Vec<OpenedInput> {
 
 fn remember(input: OpenedInput) {
     if let Ok(mut v) = OPENED.lock() {
-        if !v.iter().any(|o| o.dev == input.dev && o.ino == input.ino) {
-            v.push(input);
+        // An entry of the same identity is an earlier file whose inode was freed and reused
+        // (or this file read again): the newest path is the one that leads to it.
+        match v
+            .iter_mut()
+            .find(|o| o.dev == input.dev && o.ino == input.ino)
+        {
+            Some(o) => *o = input,
+            None => v.push(input),
         }
     }
 }

@@ -88,7 +88,20 @@ pub fn run_local(
         while !stopping && running.len() < opts.jobs.max(1) {
             let Some(i) = next.next() else { break };
             let log = logs.join(format!("{i:06}.log"));
-            let file = std::fs::File::create(&log).map_err(|source| SweepError::Io {
+            // The child writes its log as it runs (no staging file), so the rules of
+            // `crate::output` that apply are checked here: never an input, and a symlink
+            // planted under the log's name is not followed.
+            crate::output::check(&log, &[])?;
+            let file = {
+                use std::os::unix::fs::OpenOptionsExt;
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
+                    .open(&log)
+            }
+            .map_err(|source| SweepError::Io {
                 path: log.clone(),
                 source,
             })?;
