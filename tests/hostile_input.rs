@@ -2512,3 +2512,129 @@ fn one_job_runs_once_at_a_time() {
     assert_eq!(o.code, Some(0), "{}", o.stderr);
     assert!(out.join("jobs/000000.mcap").is_file());
 }
+
+// ---------------------------------------------------------------- large meshes, NaN frames
+
+/// A Collada file whose node `n{depth}` instances `n{depth-1}` twice, down to `n0`, which
+/// places an eight-triangle geometry (or nothing): 2^depth copies.
+fn instancing_bomb(depth: usize, geometry: bool) -> String {
+    let mut nodes = String::from(if geometry {
+        r##"<node id="n0"><instance_geometry url="#g"/></node>"##
+    } else {
+        r##"<node id="n0"/>"##
+    })
+    .to_string();
+    for k in 1..=depth {
+        nodes.push_str(&format!(
+            r##"<node id="n{k}"><instance_node url="#n{p}"/><instance_node url="#n{p}"/></node>"##,
+            p = k - 1
+        ));
+    }
+    format!(
+        r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 0.1 0 0 0 0.1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3"/></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="8"><input semantic="VERTEX" source="#v" offset="0"/><p>{tris}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_nodes>{nodes}</library_nodes>
+  <library_visual_scenes><visual_scene id="s"><node id="top"><instance_node url="#n{depth}"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##,
+        tris = "0 1 2 ".repeat(8)
+    )
+}
+
+#[test]
+fn meshes_are_bounded_after_instancing() {
+    for (name, text, want) in [
+        (
+            "2^30 instanced triangles",
+            instancing_bomb(30, true),
+            "instance",
+        ),
+        (
+            "2^30 empty node visits",
+            instancing_bomb(30, false),
+            "nodes",
+        ),
+    ] {
+        let l = Layout::new();
+        l.write("scene/pkg/meshes/bomb.dae", &text);
+        let scene = l.robot("package://pkg/meshes/bomb.dae", "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["bomb.dae", "link `arm`", want]),
+        );
+    }
+    // A binary STL of 2,000,001 triangles (100 MB, within the mesh file cap) is refused from
+    // its header, before any triangle is built.
+    let l = Layout::new();
+    let stl = l.sparse("scene/pkg/meshes/big.stl", 84 + 50 * 2_000_001);
+    {
+        use std::io::{Seek, SeekFrom, Write};
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&stl)
+            .expect("open");
+        f.seek(SeekFrom::Start(80)).expect("seek");
+        f.write_all(&2_000_001u32.to_le_bytes()).expect("write");
+    }
+    let scene = l.robot("package://pkg/meshes/big.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "2,000,001-triangle STL",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["big.stl", "2000001 triangles"]),
+    );
+}
+
+#[test]
+fn a_non_finite_cloth_frame_is_an_error_not_a_blank_picture() {
+    use drape::ros::msg::{Marker, Point};
+    let l = Layout::new();
+    let bag = l.path("scene/nan.mcap");
+    let mut w = BagWriter::create(&bag).expect("bag");
+    let t = w
+        .add_topic::<Marker>("/drape/mesh", Distro::Jazzy, None)
+        .expect("topic");
+    for k in 0..3u64 {
+        let z = if k == 2 { f64::NAN } else { 1.0 };
+        let p = |x: f64, y: f64| Point { x, y, z };
+        let m = Marker {
+            r#type: Marker::TRIANGLE_LIST,
+            points: vec![p(0., 0.), p(0.2, 0.), p(0.2, 0.2)],
+            ..Marker::default()
+        };
+        w.write(t, k * 33_333_333, &m).expect("write");
+    }
+    w.finish().expect("finish");
+    for out in ["scene/nan.png", "scene/nan.gif"] {
+        let out = l.path(out);
+        let before = l.hashes();
+        let o = run(&os(&["render", s(&bag), "--out", s(&out)]));
+        judge(
+            "NaN frame",
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["nan.mcap", "0.067 s", "non-finite"]),
+        );
+        assert!(report_only() || !out.exists());
+    }
+    // Frames before it still render.
+    let out = l.path("scene/first.png");
+    let before = l.hashes();
+    let o = run(&os(&["render", s(&bag), "--out", s(&out), "--at", "0"]));
+    judge("finite frame of the same bag", &l, &before, &o, Expect::Ok);
+}

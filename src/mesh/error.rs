@@ -41,6 +41,8 @@ pub enum MeshError {
         needed: u64,
         len: usize,
     },
+    #[error("mesh {path}: {count} triangles, more than the {max} a mesh may have (simplify it)", max = super::MAX_TRIANGLES)]
+    TooManyTriangles { path: PathBuf, count: u64 },
     #[error("mesh {path}: {vertices} vertices are too many for u32 indices")]
     TooManyVertices { path: PathBuf, vertices: usize },
     /// A Collada file that is not well-formed XML (the parser's error is the source).

@@ -13,7 +13,9 @@ mod stl;
 mod xml;
 
 pub use dae_error::DaeError;
-pub use data::{convex_hull, validate, TriMeshData, MAX_COORDINATE, MAX_SCALE, MIN_SCALE};
+pub use data::{
+    convex_hull, validate, TriMeshData, MAX_COORDINATE, MAX_SCALE, MAX_TRIANGLES, MIN_SCALE,
+};
 pub use error::MeshError;
 pub use simplify::simplify;
 pub use xml::XmlError;

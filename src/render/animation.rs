@@ -110,7 +110,7 @@ pub(super) fn render_gif(
         unique.dedup();
         let mut e = Extent::new();
         src.markers(&unique, |_, t, m| {
-            e.add(&src.frame(t, &m));
+            e.add(&src.frame(t, &m)?);
             Ok(())
         })?;
         framing.push(e.sphere());
@@ -150,7 +150,7 @@ pub(super) fn render_gif(
         let mut row = Vec::with_capacity(cursors.len());
         for (b, cursor) in cursors.iter_mut().enumerate() {
             let (t, m) = cursor.get(chosen[b][i])?;
-            let frame = sources[b].frame(t, &m);
+            let frame = sources[b].frame(t, &m)?;
             row.push(vec![draw_frame(&frame, framing[b], &opts)]);
         }
         let img = sheet(&row, &row_opts);

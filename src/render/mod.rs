@@ -77,6 +77,13 @@ impl Default for RenderOptions {
 pub enum RenderError {
     #[error(transparent)]
     Bag(#[from] BagError),
+    /// A cloth frame with a NaN or infinite point: drawn, it would be blank or garbage.
+    #[error("{}: the cloth frame at {time:.3} s on /drape/mesh has a non-finite point (point {point})", path.display())]
+    NonFinite {
+        path: PathBuf,
+        time: f64,
+        point: usize,
+    },
     #[error("{}: no cloth frames on /drape/mesh", path.display())]
     Empty { path: PathBuf },
     #[error("cannot write {}", path.display())]
@@ -203,8 +210,20 @@ impl Source {
         }
     }
 
-    /// The frame of cloth marker `m` at `t`: the cloth, the robot at its poses, the obstacles.
-    pub fn frame(&self, t: u64, m: &MarkerHead) -> Frame {
+    /// The frame of cloth marker `m` at `t`: the cloth, the robot at its poses, the obstacles;
+    /// a non-finite cloth point is an error naming the frame.
+    pub fn frame(&self, t: u64, m: &MarkerHead) -> Result<Frame, RenderError> {
+        if let Some(k) = m
+            .points
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
+        {
+            return Err(RenderError::NonFinite {
+                path: self.bag.path().to_path_buf(),
+                time: t.saturating_sub(self.times[0]) as f64 * 1e-9,
+                point: k,
+            });
+        }
         let mut meshes = vec![cloth_mesh(m)];
         if let Some((shapes, tf)) = &self.robot {
             let poses = tf_at(tf, t);
@@ -212,11 +231,11 @@ impl Source {
         }
         let o = obstacles::at(&self.obstacles, t);
         meshes.extend(o.meshes);
-        Frame {
+        Ok(Frame {
             time_ns: t,
             meshes,
             planes: o.planes,
-        }
+        })
     }
 
     /// The cloth markers at `indices` (ascending, no repeats), decoded in one pass.
@@ -258,7 +277,7 @@ pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderEr
     unique.dedup();
     let mut frames: HashMap<usize, Frame> = HashMap::new();
     src.markers(&unique, |k, t, m| {
-        frames.insert(k, src.frame(t, &m));
+        frames.insert(k, src.frame(t, &m)?);
         Ok(())
     })?;
     Ok(chosen
