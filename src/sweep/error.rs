@@ -21,10 +21,10 @@ pub enum SweepError {
     },
     /// The sweep file (or another file a sweep reads) is not a regular file of bounded size.
     #[error(transparent)]
-    Input(#[from] crate::input::InputError),
+    Input(Box<crate::input::InputError>),
     /// An output would overwrite an input, or could not be written whole.
     #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
+    Output(Box<crate::output::OutputError>),
     /// The sweep file or the base scene is not YAML of the expected form.
     #[error("{origin}: not a valid sweep file or scene")]
     Yaml {
@@ -45,7 +45,7 @@ pub enum SweepError {
         origin: String,
         path: PathBuf,
         #[source]
-        source: crate::input::InputError,
+        source: Box<crate::input::InputError>,
     },
     /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
     #[error("{origin}: {key}")]
@@ -108,6 +108,18 @@ pub enum SweepError {
     },
 }
 
+impl From<crate::input::InputError> for SweepError {
+    fn from(e: crate::input::InputError) -> Self {
+        SweepError::Input(Box::new(e))
+    }
+}
+
+impl From<crate::output::OutputError> for SweepError {
+    fn from(e: crate::output::OutputError) -> Self {
+        SweepError::Output(Box::new(e))
+    }
+}
+
 /// Why a job's scene document is not a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum JobSceneError {
@@ -130,7 +142,7 @@ pub enum KeyError {
     #[error("{count} jobs of {bytes}-byte scene documents: more than the {max} bytes a sweep checks (fewer jobs, or a smaller scene)")]
     TooMuchWork { count: usize, bytes: u64, max: u64 },
     /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or too long).
-    #[error("must be 1 to {} letters, digits, spaces, `-`, `_` or `.`{}", super::plan::MAX_NAME, found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
+    #[error("must be 1 to {} letters, digits, spaces, `-`, `_` or `.`{}", super::limits::MAX_NAME, found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
     BadName { found: Option<String> },
     /// A key of `set`, `grid` or `random` that is not a string (`got`: the key as JSON).
     #[error("keys must be key paths (strings), got {got}")]

@@ -17,6 +17,7 @@ pub use emit::EmitError;
 mod error;
 pub mod job;
 pub mod keypath;
+mod limits;
 pub mod plan;
 pub mod pool;
 mod rng;

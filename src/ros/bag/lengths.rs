@@ -121,10 +121,8 @@ fn walk(
                 "record {index} (opcode {opcode:#04x}) declares {len} bytes, more than the {MAX_RECORD} allowed"
             )));
         }
-        let present = match std::io::copy(&mut content.take(len), &mut std::io::sink()) {
-            Ok(n) => n,
-            Err(_) => 0,
-        };
+        let present: u64 =
+            std::io::copy(&mut content.take(len), &mut std::io::sink()).unwrap_or_default();
         if present < len {
             if len > MAX_CUT_RECORD {
                 return Err(bad(format!(
