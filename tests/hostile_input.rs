@@ -1961,6 +1961,19 @@ fn sweeps_are_bounded_before_any_work() {
     assert_eq!(plan["job_count"].as_u64(), Some(100_000));
     assert_eq!(plan["jobs"].as_array().map(Vec::len), Some(100_000));
     assert!(l.path("scene/out/jobs/099999.json").is_file());
+    // And the whole of it is checked, job by job, within the budget of a large input.
+    let before = l.hashes();
+    let a = os(&["sweep", "plan", s(&sweep)]);
+    let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    let o = drape_with(&a, None, LARGE_BUDGET * SLACK);
+    judge_within(
+        "plan of 1e5 jobs",
+        &l,
+        &before,
+        &o,
+        Expect::Ok,
+        LARGE_BUDGET,
+    );
 }
 
 // ---------------------------------------------------------------- crafted bags

@@ -10,8 +10,9 @@ use serde_yaml_ng::Value;
 pub const MAX_JOBS: usize = 100_000;
 
 /// Most bytes of job scene documents a sweep may make (jobs times the scene document's size):
-/// [`Sweep::load`] parses and validates each one, and this bounds its time (seconds).
-pub const MAX_JOB_DOCUMENTS: u64 = 256 << 20;
+/// [`super::Sweep::load`] parses and validates each one, and this bounds its time (about ten
+/// seconds on two cores of a debug build, a few in a release build).
+pub const MAX_JOB_DOCUMENTS: u64 = 64 << 20;
 
 /// Jobs of a sweep (`samples` times each grid list's length), refused above [`MAX_JOBS`] or
 /// [`MAX_JOB_DOCUMENTS`] before anything is built; the error names `samples` or `grid`.

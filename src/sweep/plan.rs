@@ -125,10 +125,15 @@ impl Sweep {
     pub fn load(path: &Path) -> Result<Sweep, SweepError> {
         let text = crate::input::read_text(path, crate::input::InputKind::Sweep)?;
         let sweep = Self::from_yaml(&text, path)?;
-        for i in 0..sweep.count {
-            sweep.job_spec(&sweep.job(i)?)?;
+        // Jobs are checked on every core; the error reported is the lowest job's.
+        use rayon::prelude::*;
+        let first = (0..sweep.count)
+            .into_par_iter()
+            .find_map_first(|i| sweep.job(i).and_then(|j| sweep.job_spec(&j)).err());
+        match first {
+            Some(e) => Err(e),
+            None => Ok(sweep),
         }
-        Ok(sweep)
     }
 
     /// Reads a sweep file and checks each key, but not every job's scene: what one array task
