@@ -43,8 +43,8 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         };
         let id = g.attr("id").unwrap_or("");
         let data = read_mesh(mesh).map_err(|e| collada(path, Some(id), e))?;
-        if all.indices.len() + data.indices.len() > super::MAX_TRIANGLES {
-            let max = super::MAX_TRIANGLES;
+        if all.indices.len() + data.indices.len() > super::limits::MAX_TRIANGLES {
+            let max = super::limits::MAX_TRIANGLES;
             return Err(collada(path, Some(id), DaeError::TooManyTriangles { max }));
         }
         all.append(&data);
@@ -202,9 +202,9 @@ impl SceneCtx<'_, '_> {
                         })?;
                     // Counted before copying: nodes that instance each other a few times per
                     // level multiply the triangles exponentially with the depth.
-                    if self.out.indices.len() + g.indices.len() > super::MAX_TRIANGLES {
+                    if self.out.indices.len() + g.indices.len() > super::limits::MAX_TRIANGLES {
                         return Err(DaeError::TooManyTriangles {
-                            max: super::MAX_TRIANGLES,
+                            max: super::limits::MAX_TRIANGLES,
                         });
                     }
                     let mut placed = g.clone();

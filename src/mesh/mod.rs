@@ -7,16 +7,16 @@ mod dae;
 mod dae_error;
 mod data;
 mod error;
+mod limits;
 mod obj;
 mod simplify;
 mod stl;
 mod xml;
 
 pub use dae_error::DaeError;
-pub use data::{
-    convex_hull, validate, TriMeshData, MAX_COORDINATE, MAX_SCALE, MAX_TRIANGLES, MIN_SCALE,
-};
+pub use data::{convex_hull, validate, TriMeshData};
 pub use error::MeshError;
+pub use limits::{MAX_COORDINATE, MAX_SCALE, MAX_TRIANGLES, MIN_SCALE};
 pub use simplify::simplify;
 pub use xml::XmlError;
 

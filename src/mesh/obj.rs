@@ -21,7 +21,7 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         source,
     })?;
     let count: u64 = models.iter().map(|m| m.mesh.indices.len() as u64 / 3).sum();
-    if count > super::MAX_TRIANGLES as u64 {
+    if count > super::limits::MAX_TRIANGLES as u64 {
         return Err(MeshError::TooManyTriangles {
             path: path.to_path_buf(),
             count,

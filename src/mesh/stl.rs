@@ -39,7 +39,7 @@ pub(super) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
             len: bytes.len(),
         });
     }
-    if n > super::MAX_TRIANGLES as u64 {
+    if n > super::limits::MAX_TRIANGLES as u64 {
         return Err(MeshError::TooManyTriangles {
             path: path.to_path_buf(),
             count: n,
@@ -84,7 +84,7 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
         .iter()
         .map(|v| Vec3::new(v.0[0] as f64, v.0[1] as f64, v.0[2] as f64))
         .collect();
-    if indexed.faces.len() > super::MAX_TRIANGLES {
+    if indexed.faces.len() > super::limits::MAX_TRIANGLES {
         return Err(MeshError::TooManyTriangles {
             path: path.to_path_buf(),
             count: indexed.faces.len() as u64,

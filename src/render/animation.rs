@@ -2,8 +2,10 @@
 //! as the animation reaches them, so memory holds one frame per bag whatever the number of
 //! frames. Each bag is framed on its own over its picked frames (a first pass over them).
 
+use super::draw::{draw_frame, sheet};
+use super::frames::{Extent, Source};
 use super::marker::MarkerHead;
-use super::{draw_frame, sheet, Extent, Pick, RenderError, RenderOptions, Source, WriteError};
+use super::options::{Pick, RenderError, RenderOptions, WriteError};
 use crate::ros::bag::TopicIter;
 use std::path::PathBuf;
 

@@ -141,9 +141,10 @@ pub enum KeyError {
     /// The jobs' scene documents, which are all checked before any job runs, are too large.
     #[error("{count} jobs of {bytes}-byte scene documents: more than the {max} bytes a sweep checks (fewer jobs, or a smaller scene)")]
     TooMuchWork { count: usize, bytes: u64, max: u64 },
-    /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or too long).
-    #[error("must be 1 to {} letters, digits, spaces, `-`, `_` or `.`{}", super::limits::MAX_NAME, found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
-    BadName { found: Option<String> },
+    /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or longer
+    /// than `max`).
+    #[error("must be 1 to {max} letters, digits, spaces, `-`, `_` or `.`{}", found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
+    BadName { found: Option<String>, max: usize },
     /// A key of `set`, `grid` or `random` that is not a string (`got`: the key as JSON).
     #[error("keys must be key paths (strings), got {got}")]
     NotAKeyPath { got: String },

@@ -78,6 +78,7 @@ pub(super) fn check_name(name: &str) -> Result<(), KeyError> {
     if name.chars().count() > MAX_NAME || bad.is_some() {
         return Err(KeyError::BadName {
             found: bad.map(|c| format!("{c:?}")),
+            max: MAX_NAME,
         });
     }
     Ok(())
