@@ -8,8 +8,8 @@
 //!   file that grows or lies about its size cannot make drape read without bound;
 //! - symlinks are resolved before any containment check ([`contained`]), so a link inside an
 //!   allowed tree that points outside it is refused before the target is opened;
-//! - every file opened is remembered by device and inode ([`opened`]), so the recorder can
-//!   refuse to write onto one of its own inputs.
+//! - every file opened is remembered by device and inode ([`opened`]), so an output
+//!   ([`crate::output`]) is never written onto one of the command's own inputs.
 
 use std::fmt;
 use std::io::Read;
@@ -25,6 +25,14 @@ pub enum InputKind {
     Mesh,
     JointsBag,
     NodeParams,
+    /// A sweep file (`drape sweep ...`).
+    Sweep,
+    /// A sweep's `plan.json`.
+    SweepPlan,
+    /// A sweep job's result record (`jobs/I.json`).
+    JobRecord,
+    /// A cached study reference solution.
+    StudyCache,
 }
 
 impl InputKind {
@@ -37,6 +45,11 @@ impl InputKind {
             InputKind::Urdf => 16 << 20,
             InputKind::Mesh => 256 << 20,
             InputKind::JointsBag => 1 << 30,
+            InputKind::Sweep => 4 << 20,
+            InputKind::JobRecord => 1 << 20,
+            // Every job's values, one line each, for at most `sweep::plan::MAX_JOBS` jobs.
+            InputKind::SweepPlan => 256 << 20,
+            InputKind::StudyCache => 256 << 20,
         }
     }
 }
@@ -49,6 +62,10 @@ impl fmt::Display for InputKind {
             InputKind::Mesh => "mesh",
             InputKind::JointsBag => "joints bag",
             InputKind::NodeParams => "parameters file",
+            InputKind::Sweep => "sweep file",
+            InputKind::SweepPlan => "sweep plan",
+            InputKind::JobRecord => "job record",
+            InputKind::StudyCache => "study cache",
         })
     }
 }
@@ -127,8 +144,14 @@ pub fn opened() -> Vec<OpenedInput> {
 
 fn remember(input: OpenedInput) {
     if let Ok(mut v) = OPENED.lock() {
-        if !v.iter().any(|o| o.dev == input.dev && o.ino == input.ino) {
-            v.push(input);
+        // An entry of the same identity is an earlier file whose inode was freed and reused
+        // (or this file read again): the newest path is the one that leads to it.
+        match v
+            .iter_mut()
+            .find(|o| o.dev == input.dev && o.ino == input.ino)
+        {
+            Some(o) => *o = input,
+            None => v.push(input),
         }
     }
 }
@@ -302,12 +325,16 @@ pub fn contained(path: &Path, allowed: &[PathBuf]) -> Result<PathBuf, InputError
 }
 
 /// Whether `path` names the same file (device and inode) as one of the inputs read so far.
+/// An input is only one while its own path still leads to that file: an inode freed by a
+/// deleted or replaced input (and reused for a new file) is not mistaken for it.
 pub fn is_an_input(path: &Path) -> Option<OpenedInput> {
     use std::os::unix::fs::MetadataExt;
     let meta = std::fs::metadata(path).ok()?;
-    opened()
-        .into_iter()
-        .find(|o| o.dev == meta.dev() && o.ino == meta.ino())
+    opened().into_iter().find(|o| {
+        o.dev == meta.dev()
+            && o.ino == meta.ino()
+            && std::fs::metadata(&o.path).is_ok_and(|m| m.dev() == o.dev && m.ino() == o.ino)
+    })
 }
 
 /// The error and every cause below it, one per line: `error: <top>` then `  caused by: ...`.

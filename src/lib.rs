@@ -21,6 +21,7 @@ pub mod input;
 pub mod integrate;
 pub mod linalg;
 pub mod mesh;
+pub mod output;
 mod par;
 pub mod pose;
 #[cfg(feature = "ros")]

@@ -23,6 +23,8 @@ const MEMORY_LIMIT: u64 = 200 << 20;
 const BUDGET: Duration = Duration::from_secs(2);
 const SLACK: u32 = 3;
 const KILL_AFTER: Duration = Duration::from_secs(10);
+/// Budget of a large input that must still succeed (or be refused by a documented limit).
+const LARGE_BUDGET: Duration = Duration::from_secs(20);
 
 #[path = "common/tiny_scene.rs"]
 mod tiny_scene;
@@ -194,6 +196,16 @@ fn report_only() -> bool {
 }
 
 fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
+    drape_limited(args, None)
+}
+
+/// [`drape`] with a limit on the size of any file the child writes (`RLIMIT_FSIZE`: a write
+/// past it fails with `EFBIG`, as on a full disk; `SIGXFSZ` is ignored so the write returns).
+fn drape_limited(args: &[&std::ffi::OsStr], file_size: Option<u64>) -> Outcome {
+    drape_with(args, file_size, KILL_AFTER)
+}
+
+fn drape_with(args: &[&std::ffi::OsStr], file_size: Option<u64>, kill_after: Duration) -> Outcome {
     let mut cmd = Command::new(binary());
     cmd.args(args)
         .env("RUST_LOG", "error")
@@ -204,13 +216,23 @@ fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             let lim = libc::rlimit {
                 rlim_cur: MEMORY_LIMIT,
                 rlim_max: MEMORY_LIMIT,
             };
             if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
                 return Err(std::io::Error::last_os_error());
+            }
+            if let Some(n) = file_size {
+                let lim = libc::rlimit {
+                    rlim_cur: n,
+                    rlim_max: n,
+                };
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
             }
             Ok(())
         });
@@ -227,11 +249,11 @@ fn drape(args: &[&std::ffi::OsStr]) -> Outcome {
         if let Some(s) = child.try_wait().expect("wait") {
             break s;
         }
-        if start.elapsed() > KILL_AFTER {
+        if start.elapsed() > kill_after {
             let _ = child.kill();
             let s = child.wait().expect("wait");
             if !report_only() {
-                panic!("drape {args:?} still running after {KILL_AFTER:?}; killed ({s})");
+                panic!("drape {args:?} still running after {kill_after:?}; killed ({s})");
             }
             break s;
         }
@@ -312,7 +334,19 @@ enum Expect<'a> {
 
 /// The common assertions of every case.
 fn judge(name: &str, l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) {
-    let failures = verdict(l, before, o, want);
+    judge_within(name, l, before, o, want, BUDGET)
+}
+
+/// [`judge`] with another time budget (a large input that must still succeed).
+fn judge_within(
+    name: &str,
+    l: &Layout,
+    before: &BTreeMap<PathBuf, u64>,
+    o: &Outcome,
+    want: Expect,
+    budget: Duration,
+) {
+    let failures = verdict(l, before, o, want, budget);
     let err = o.stderr.trim().replace('\n', "\n    ");
     if failures.is_empty() {
         eprintln!("{name}: ok in {:?}\n    {err}", o.elapsed);
@@ -323,7 +357,13 @@ fn judge(name: &str, l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, w
     }
 }
 
-fn verdict(l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expect) -> Vec<String> {
+fn verdict(
+    l: &Layout,
+    before: &BTreeMap<PathBuf, u64>,
+    o: &Outcome,
+    want: Expect,
+    budget: Duration,
+) -> Vec<String> {
     let mut f = Vec::new();
     let err = &o.stderr;
     if let Some(s) = o.signal {
@@ -332,8 +372,8 @@ fn verdict(l: &Layout, before: &BTreeMap<PathBuf, u64>, o: &Outcome, want: Expec
     if err.contains("panicked") {
         f.push("panicked".into());
     }
-    if o.elapsed >= BUDGET * SLACK {
-        f.push(format!("took {:?} (budget {BUDGET:?})", o.elapsed));
+    if o.elapsed >= budget * SLACK {
+        f.push(format!("took {:?} (budget {budget:?})", o.elapsed));
     }
     match want {
         Expect::Ok => {
@@ -1373,4 +1413,1256 @@ fn a_signal_during_build_and_sewing_ends_the_run() {
         .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
+}
+
+// ---------------------------------------------------------------- outputs
+
+fn os(args: &[&str]) -> Vec<std::ffi::OsString> {
+    args.iter().map(std::ffi::OsString::from).collect()
+}
+
+fn run(args: &[std::ffi::OsString]) -> Outcome {
+    let a: Vec<&std::ffi::OsStr> = args.iter().map(|x| x.as_os_str()).collect();
+    drape(&a)
+}
+
+fn run_limited(args: &[std::ffi::OsString], file_size: u64) -> Outcome {
+    let a: Vec<&std::ffi::OsStr> = args.iter().map(|x| x.as_os_str()).collect();
+    drape_limited(&a, Some(file_size))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf8 path")
+}
+
+/// `scene/s.yaml`: a sweep over the tiny scene (`scene/scene.yaml`) into `scene/out`.
+fn sweep_yaml(l: &Layout, body: &str) -> PathBuf {
+    l.scene(SCENE);
+    l.write(
+        "scene/s.yaml",
+        format!("name: s\nscene: scene.yaml\nout: out\n{body}"),
+    )
+}
+
+/// A bag of the tiny scene, recorded by drape (`scene/b.mcap`).
+fn tiny_bag(l: &Layout) -> PathBuf {
+    let scene = l.scene(SCENE);
+    let bag = l.path("scene/b.mcap");
+    let o = record(&scene, &bag, &[]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    bag
+}
+
+/// Staging files (`.partial`, `.tmp`) left anywhere under the layout.
+fn staging_left(l: &Layout) -> Vec<PathBuf> {
+    fn walk(d: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(rd) = std::fs::read_dir(d) else { return };
+        for e in rd.flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.contains(".partial") || name.contains(".tmp") || name.ends_with(".part") {
+                out.push(p.clone());
+            }
+            if p.is_dir() && !p.is_symlink() {
+                walk(&p, out);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&l.root, &mut out);
+    out
+}
+
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let l = Layout::new();
+    let bag = tiny_bag(&l);
+    let scene = l.path("scene/scene.yaml");
+    let sweep = sweep_yaml(&l, "");
+    let out = l.path("scene/out.mcap");
+    let gif = l.path("scene/b.gif");
+    std::fs::hard_link(&bag, &gif).expect("hard link");
+    let manifest = l.symlink(&scene, "scene/m.yaml");
+    let cases: Vec<(&str, Vec<std::ffi::OsString>, PathBuf)> = vec![
+        (
+            "record --summary = scene",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                s(&out),
+                "--summary",
+                s(&scene),
+            ]),
+            scene.clone(),
+        ),
+        (
+            "record --summary = --out",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                s(&out),
+                "--summary",
+                s(&out),
+            ]),
+            out.clone(),
+        ),
+        (
+            "render --out = its bag",
+            os(&["render", s(&bag), "--out", s(&bag)]),
+            bag.clone(),
+        ),
+        (
+            "render --out = a hard link of its bag",
+            os(&["render", s(&bag), "--out", s(&gif)]),
+            gif.clone(),
+        ),
+        (
+            "emit slurm --script = the sweep file",
+            os(&["sweep", "emit", "slurm", s(&sweep), "--script", s(&sweep)]),
+            sweep.clone(),
+        ),
+        (
+            "emit k8s --manifest = the sweep file",
+            os(&["sweep", "emit", "k8s", s(&sweep), "--manifest", s(&sweep)]),
+            sweep.clone(),
+        ),
+        (
+            "emit k8s --manifest = a symlink to the scene",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--manifest",
+                s(&manifest),
+            ]),
+            manifest.clone(),
+        ),
+    ];
+    for (name, args, named) in cases {
+        let before = l.hashes();
+        let o = run(&args);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&[s(&named), "refusing to overwrite"]),
+        );
+        assert!(report_only() || !out.exists(), "{name}: wrote the bag");
+    }
+    assert!(staging_left(&l).is_empty(), "{:?}", staging_left(&l));
+
+    // A sweep whose output folder holds its own scene as plan.json (a hard link) or its sweep
+    // file as manifest.csv (a symlink).
+    std::fs::create_dir_all(l.path("scene/out")).expect("mkdir");
+    std::fs::hard_link(&scene, l.path("scene/out/plan.json")).expect("hard link");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    judge(
+        "plan.json = scene",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "refusing to overwrite"]),
+    );
+    std::fs::remove_file(l.path("scene/out/plan.json")).expect("rm");
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    l.symlink(&sweep, "scene/out/manifest.csv");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&l.path("scene/out"))]));
+    judge(
+        "manifest.csv = sweep file",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["manifest.csv", "refusing to overwrite"]),
+    );
+    assert!(staging_left(&l).is_empty(), "{:?}", staging_left(&l));
+}
+
+#[test]
+fn a_full_disk_leaves_nothing_under_the_final_name() {
+    let l = Layout::new();
+    let bag = tiny_bag(&l);
+    let scene = l.path("scene/scene.yaml");
+    let sweep = sweep_yaml(&l, "");
+    let png = l.path("scene/t.png");
+    let gif = l.path("scene/t.gif");
+    let summary = l.path("scene/summary.json");
+    let out = l.path("scene/out.mcap");
+    let cases: Vec<(&str, Vec<std::ffi::OsString>, u64, PathBuf)> = vec![
+        (
+            "PNG",
+            os(&["render", s(&bag), "--out", s(&png)]),
+            2000,
+            png.clone(),
+        ),
+        (
+            "GIF",
+            os(&["render", s(&bag), "--out", s(&gif)]),
+            2000,
+            gif.clone(),
+        ),
+        // The GIF's last bytes (trailer and flush) fail: a limit just under its full size.
+        (
+            "GIF trailer",
+            os(&["render", s(&bag), "--out", s(&gif), "--size", "8x8"]),
+            0,
+            gif.clone(),
+        ),
+        (
+            "--summary",
+            os(&[
+                "record",
+                "--quiet",
+                "--scene",
+                s(&scene),
+                "--out",
+                "/dev/null",
+                "--summary",
+                s(&summary),
+            ]),
+            100,
+            summary.clone(),
+        ),
+        (
+            "bag",
+            os(&["record", "--quiet", "--scene", s(&scene), "--out", s(&out)]),
+            4000,
+            out.clone(),
+        ),
+        (
+            "sweep plan.json",
+            os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]),
+            64,
+            l.path("scene/out/plan.json"),
+        ),
+        (
+            "emit script",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--out",
+                s(&l.path("scene/o2")),
+                "--script",
+                s(&l.path("scene/x.sh")),
+            ]),
+            400,
+            l.path("scene/x.sh"),
+        ),
+    ];
+    for (name, args, mut limit, target) in cases {
+        if limit == 0 {
+            // Measure the full size, then allow one byte less.
+            let o = run(&args);
+            assert_eq!(o.code, Some(0), "{name}: {}", o.stderr);
+            limit = std::fs::metadata(&target).expect("written").len() - 1;
+            std::fs::remove_file(&target).expect("rm");
+        }
+        let before = l.hashes();
+        let o = run_limited(&args, limit);
+        judge(name, &l, &before, &o, Expect::Error(&[s(&target)]));
+        assert!(
+            report_only() || !target.exists(),
+            "{name}: {} left",
+            target.display()
+        );
+        assert!(
+            staging_left(&l).is_empty(),
+            "{name}: {:?}",
+            staging_left(&l)
+        );
+    }
+}
+
+// ---------------------------------------------------------------- scheduler files
+
+/// Documents in a YAML text, and the `kind` of each.
+fn yaml_kinds(text: &str) -> Vec<String> {
+    use serde::Deserialize;
+    serde_yaml_ng::Deserializer::from_str(text)
+        .map(|d| {
+            let v = serde_yaml_ng::Value::deserialize(d).expect("YAML");
+            v.get("kind")
+                .and_then(|k| k.as_str())
+                .unwrap_or("")
+                .to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn names_and_paths_cannot_inject_into_scheduler_files() {
+    let l = Layout::new();
+    let script = l.path("scene/x.sh");
+    let manifest = l.path("scene/x.yaml");
+    // Names that would put a live shell line into the script or a second document (a Pod)
+    // into the manifest are refused when the sweep is read, by every command.
+    for (name, text) in [
+        ("backtick and newline", "\"a`touch /tmp/pwned`\\nb\""),
+        ("second document", "\"a\\n---\\nkind: Pod\\n\""),
+        ("shell operators", "\"a; rm -rf ~\""),
+    ] {
+        let sweep = sweep_yaml(&l, "");
+        let sweep = l.write(
+            "scene/s.yaml",
+            std::fs::read_to_string(&sweep)
+                .expect("read")
+                .replace("name: s", &format!("name: {text}")),
+        );
+        for args in [
+            os(&["sweep", "plan", s(&sweep)]),
+            os(&["sweep", "emit", "slurm", s(&sweep), "--script", s(&script)]),
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--manifest",
+                s(&manifest),
+            ]),
+        ] {
+            let before = l.hashes();
+            let o = run(&args);
+            judge(name, &l, &before, &o, Expect::Error(&["s.yaml", "name"]));
+            assert!(report_only() || (!script.exists() && !manifest.exists()));
+        }
+    }
+    // Paths and options with a newline (an `#SBATCH` line of their own) or characters an
+    // `#SBATCH` line cannot carry are refused, naming the option.
+    let sweep = sweep_yaml(&l, "");
+    let nl_out = l.path("scene/o\n#SBATCH --mem=1T");
+    for (name, args, key) in [
+        (
+            "out with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--out",
+                s(&nl_out),
+                "--script",
+                s(&script),
+            ]),
+            "out",
+        ),
+        (
+            "partition with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--partition",
+                "p\n#SBATCH --mem=1T",
+                "--script",
+                s(&script),
+            ]),
+            "--partition",
+        ),
+        (
+            "sbatch with a command substitution",
+            os(&[
+                "sweep",
+                "emit",
+                "slurm",
+                s(&sweep),
+                "--sbatch=--comment=$(id)",
+                "--script",
+                s(&script),
+            ]),
+            "--sbatch",
+        ),
+        (
+            "k8s out with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--out",
+                "/data/o\n---\nkind: Pod",
+                "--manifest",
+                s(&manifest),
+            ]),
+            "--out",
+        ),
+        (
+            "k8s image with a newline",
+            os(&[
+                "sweep",
+                "emit",
+                "k8s",
+                s(&sweep),
+                "--image",
+                "x\nkind: Pod",
+                "--manifest",
+                s(&manifest),
+            ]),
+            "--image",
+        ),
+    ] {
+        let before = l.hashes();
+        let o = run(&args);
+        judge(name, &l, &before, &o, Expect::Error(&[key]));
+        assert!(
+            report_only() || (!script.exists() && !manifest.exists()),
+            "{name}"
+        );
+    }
+    assert!(report_only() || !l.path("scene/o\n#SBATCH --mem=1T").exists());
+
+    // Valid but awkward values: the script passes `bash -n` with one `exec` line, the
+    // manifest is exactly one document, a Job, with the values intact.
+    let sweep = l.write(
+        "scene/s.yaml",
+        "name: my.sweep-1\nscene: scene.yaml\nout: out\ngrid:\n  duration: [0.1, 0.2]\n",
+    );
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "emit",
+        "slurm",
+        s(&sweep),
+        "--script",
+        s(&script),
+        "--drape",
+        "/opt/it's here/drape",
+    ]));
+    judge("valid slurm", &l, &before, &o, Expect::Ok);
+    let text = std::fs::read_to_string(&script).expect("script");
+    let check = Command::new("bash")
+        .arg("-n")
+        .arg(&script)
+        .output()
+        .expect("bash");
+    assert!(
+        check.status.success(),
+        "bash -n: {}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let live: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .collect();
+    assert_eq!(live.len(), 3, "{text}");
+    assert!(
+        live[2].starts_with("exec '/opt/it'\\''s here/drape' sweep run "),
+        "{text}"
+    );
+    assert!(text.contains("#SBATCH --array=0-1\n"), "{text}");
+    let image = "reg.example/drape:1 # not: a comment\"'";
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "emit",
+        "k8s",
+        s(&sweep),
+        "--manifest",
+        s(&manifest),
+        "--image",
+        image,
+        "--pvc",
+        "a: b",
+    ]));
+    judge("valid k8s", &l, &before, &o, Expect::Ok);
+    let text = std::fs::read_to_string(&manifest).expect("manifest");
+    assert_eq!(yaml_kinds(&text), ["Job"], "{text}");
+    let job: serde_yaml_ng::Value = serde_yaml_ng::from_str(&text).expect("one document");
+    let c = &job["spec"]["template"]["spec"]["containers"][0];
+    assert_eq!(c["image"].as_str(), Some(image));
+    assert_eq!(job["spec"]["completions"].as_u64(), Some(2));
+}
+
+// ---------------------------------------------------------------- unbounded sweeps
+
+#[test]
+fn sweeps_are_bounded_before_any_work() {
+    let l = Layout::new();
+    let list = |n: usize| format!("[{}]", vec!["0.1"; n].join(", "));
+    let big = "x".repeat(5000);
+    for (name, body, key) in [
+        (
+            "samples 1e9",
+            "samples: 1000000000\n".to_string(),
+            "samples",
+        ),
+        (
+            "samples u64::MAX",
+            "samples: 18446744073709551615\n".to_string(),
+            "samples",
+        ),
+        (
+            "a 1e9 grid",
+            format!(
+                "grid:\n  duration: {}\n  solver.dt: {}\n  cloths[0].material.stretch: {}\n",
+                list(1000),
+                list(1000),
+                list(1000)
+            ),
+            "grid",
+        ),
+        (
+            "1e5 jobs of a large scene document",
+            format!("samples: 100000\ngrid:\n  name: [\"{big}\"]\n"),
+            "grid",
+        ),
+    ] {
+        let sweep = sweep_yaml(&l, &body);
+        for args in [
+            os(&["sweep", "plan", s(&sweep)]),
+            os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]),
+            os(&["sweep", "emit", "k8s", s(&sweep)]),
+        ] {
+            let before = l.hashes();
+            let o = run(&args);
+            judge(
+                name,
+                &l,
+                &before,
+                &o,
+                Expect::Error(&["s.yaml", key, "jobs"]),
+            );
+        }
+        assert!(
+            report_only() || !l.path("scene/out/plan.json").exists(),
+            "{name}"
+        );
+    }
+    // The largest sweep allowed: one job of it runs without building the plan in memory
+    // (the child's address space is limited), and its plan file streams to disk.
+    let sweep = sweep_yaml(
+        &l,
+        "samples: 100000\nrandom:\n  duration: { uniform: [0.1, 0.12] }\n",
+    );
+    let before = l.hashes();
+    let o = run(&os(&[
+        "sweep",
+        "run",
+        s(&sweep),
+        "--index",
+        "99999",
+        "--quiet",
+    ]));
+    judge("one job of 1e5", &l, &before, &o, Expect::Ok);
+    let plan = std::fs::read_to_string(l.path("scene/out/plan.json")).expect("plan");
+    let plan: serde_json::Value = serde_json::from_str(&plan).expect("plan is JSON");
+    assert_eq!(plan["job_count"].as_u64(), Some(100_000));
+    assert_eq!(plan["jobs"].as_array().map(Vec::len), Some(100_000));
+    assert!(l.path("scene/out/jobs/099999.json").is_file());
+    // And the whole of it is checked, job by job, within the budget of a large input.
+    let before = l.hashes();
+    let a = os(&["sweep", "plan", s(&sweep)]);
+    let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    let o = drape_with(&a, None, LARGE_BUDGET * SLACK);
+    judge_within(
+        "plan of 1e5 jobs",
+        &l,
+        &before,
+        &o,
+        Expect::Ok,
+        LARGE_BUDGET,
+    );
+}
+
+// ---------------------------------------------------------------- crafted bags
+
+/// An MCAP file of a header and one chunk (`compression` "zstd" or "") whose content is
+/// `content` and whose declared uncompressed size is `declared`; no summary, no footer.
+fn crafted_bag(content: &[u8], declared: u64, compression: &str) -> Vec<u8> {
+    let record = |op: u8, body: &[u8]| {
+        let mut r = vec![op];
+        r.extend((body.len() as u64).to_le_bytes());
+        r.extend(body);
+        r
+    };
+    let string = |s: &str| {
+        let mut b = (s.len() as u32).to_le_bytes().to_vec();
+        b.extend(s.as_bytes());
+        b
+    };
+    let data = if compression == "zstd" {
+        zstd::bulk::compress(content, 3).expect("zstd")
+    } else {
+        content.to_vec()
+    };
+    let mut chunk = Vec::new();
+    chunk.extend(0u64.to_le_bytes());
+    chunk.extend(1u64.to_le_bytes());
+    chunk.extend(declared.to_le_bytes());
+    chunk.extend(0u32.to_le_bytes());
+    chunk.extend(string(compression));
+    chunk.extend((data.len() as u64).to_le_bytes());
+    chunk.extend(&data);
+    let mut header = string("ros2");
+    header.extend(string("hostile"));
+    let mut f = b"\x89MCAP0\r\n".to_vec();
+    f.extend(record(0x01, &header));
+    f.extend(record(0x06, &chunk));
+    f
+}
+
+/// A message record header declaring `len` bytes, then a few bytes of it.
+fn message_head(len: u64) -> Vec<u8> {
+    let mut c = vec![0x05];
+    c.extend(len.to_le_bytes());
+    c.extend([0u8; 22]);
+    c
+}
+
+#[test]
+fn lengths_inside_compressed_chunks_are_checked_before_allocating() {
+    let l = Layout::new();
+    let scene = l.robot("package://pkg/meshes/m.stl", "");
+    for (name, bytes, want) in [
+        (
+            "2^40-byte record in a zstd chunk",
+            crafted_bag(&message_head(1 << 40), 31, "zstd"),
+            "but only 22",
+        ),
+        (
+            "2^40-byte record in a zstd chunk declaring 2^41 bytes",
+            crafted_bag(&message_head(1 << 40), 1 << 41, "zstd"),
+            "more than the",
+        ),
+        (
+            "200 MiB record cut short in a zstd chunk declaring 2^41 bytes",
+            crafted_bag(&message_head(200 << 20), 1 << 41, "zstd"),
+            "ends after",
+        ),
+        (
+            "2^40-byte record in an uncompressed chunk",
+            crafted_bag(&message_head(1 << 40), 31, ""),
+            "but only 22",
+        ),
+    ] {
+        let bag = l.write("scene/crafted.mcap", &bytes);
+        let png = l.path("scene/x.png");
+        let before = l.hashes();
+        let o = run(&os(&["render", s(&bag), "--out", s(&png)]));
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["crafted.mcap", "chunk 0", want]),
+        );
+        let o = record(&scene, &l.path("scene/out.mcap"), &["--joints", s(&bag)]);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["crafted.mcap", "chunk 0", want]),
+        );
+        assert!(report_only() || !png.exists());
+    }
+    assert!(crafted_bag(&message_head(1 << 40), 31, "zstd").len() < 300);
+}
+
+// ---------------------------------------------------------------- sweep inputs
+
+#[test]
+fn sweep_inputs_follow_the_input_rules() {
+    let l = Layout::new();
+    let zero = Path::new("/dev/zero");
+    let fifo = l.fifo("scene/f.yaml");
+    // The sweep file itself.
+    for (p, what) in [(fifo.as_path(), "FIFO"), (zero, "character device")] {
+        let before = l.hashes();
+        let o = run(&os(&["sweep", "plan", s(p)]));
+        judge("sweep file", &l, &before, &o, Expect::Error(&[s(p), what]));
+        let o = run(&os(&["sweep", "run", s(p), "--index", "0"]));
+        judge("sweep file", &l, &before, &o, Expect::Error(&[s(p), what]));
+    }
+    // Its scene.
+    for (p, what) in [(fifo.as_path(), "FIFO"), (zero, "character device")] {
+        l.scene(SCENE);
+        let sweep = l.write("scene/s.yaml", format!("name: s\nscene: {}\n", s(p)));
+        let before = l.hashes();
+        let o = run(&os(&["sweep", "plan", s(&sweep)]));
+        judge(
+            "scene",
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["s.yaml", "scene", s(p), what]),
+        );
+    }
+    // The output folder's plan and job records, under collect.
+    let sweep = sweep_yaml(&l, "samples: 2\n");
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let out = l.path("scene/out");
+    std::fs::remove_file(out.join("jobs/000000.json")).expect("rm");
+    l.symlink(zero, "scene/out/jobs/000000.json");
+    l.fifo("scene/out/jobs/000001.json");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge("job records", &l, &before, &o, Expect::Ok);
+    std::fs::rename(out.join("plan.json"), out.join("plan.old")).expect("mv");
+    l.symlink(zero, "scene/out/plan.json");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan.json",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "character device"]),
+    );
+}
+
+// ---------------------------------------------------------------- limits and extents
+
+#[test]
+fn joint_limits_are_finite_ordered_and_not_negative() {
+    for (name, limit, attribute) in [
+        (
+            "lower NaN",
+            r#"lower="nan" upper="1" effort="1" velocity="1""#,
+            "lower",
+        ),
+        (
+            "lower above upper",
+            r#"lower="2" upper="1" effort="1" velocity="1""#,
+            "lower",
+        ),
+        (
+            "negative velocity",
+            r#"lower="-1" upper="1" effort="1" velocity="-3""#,
+            "velocity",
+        ),
+        (
+            "infinite effort",
+            r#"lower="-1" upper="1" effort="inf" velocity="1""#,
+            "effort",
+        ),
+        (
+            "upper 1e300",
+            r#"lower="-1" upper="1e300" effort="1" velocity="1""#,
+            "upper",
+        ),
+    ] {
+        let l = Layout::new();
+        l.robot("package://pkg/meshes/m.stl", "");
+        let text = std::fs::read_to_string(l.path("scene/pkg/urdf/robot.urdf"))
+            .expect("urdf")
+            .replace(r#"lower="-1" upper="1" effort="1" velocity="1""#, limit);
+        l.write("scene/pkg/urdf/robot.urdf", text);
+        let scene = l.path("scene/scene.yaml");
+        let before = l.hashes();
+        let want = ["robot.urdf", "joint `j`", &format!("<limit {attribute}=")];
+        let o = check(&scene);
+        judge(name, &l, &before, &o, Expect::Error(&want));
+        let o = record(&scene, &l.path("scene/out.mcap"), &[]);
+        judge(name, &l, &before, &o, Expect::Error(&want));
+    }
+}
+
+/// A Collada square of half-width `half` (m) at the origin.
+fn square_dae(half: &str) -> String {
+    format!(
+        r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="12">-{half} -{half} 0 {half} -{half} 0 {half} {half} 0 -{half} {half} 0</float_array>
+      <technique_common><accessor source="#pa" count="4" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="2"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 0 2 3</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##
+    )
+}
+
+#[test]
+fn mesh_extents_and_scales_are_bounded() {
+    let stl_far = TETRA.replacen("vertex 0.1 0 0", "vertex 3.4e38 0 0", 1);
+    for (name, file, body, scale, want) in [
+        (
+            "Collada floor at 1e20 m",
+            "far.dae",
+            square_dae("1e20"),
+            "1 1 1",
+            "beyond",
+        ),
+        (
+            "STL vertex at 3.4e38",
+            "far.stl",
+            stl_far,
+            "1 1 1",
+            "beyond",
+        ),
+        (
+            "scale 1e30",
+            "m2.stl",
+            TETRA.to_string(),
+            "1e30 1 1",
+            "scale",
+        ),
+        (
+            "scale 1e-320",
+            "m2.stl",
+            TETRA.to_string(),
+            "1 1e-320 1",
+            "scale",
+        ),
+    ] {
+        let l = Layout::new();
+        l.write(&format!("scene/pkg/meshes/{file}"), &body);
+        let mesh = format!(r#"package://pkg/meshes/{file}" scale="{scale}"#);
+        let scene = l.robot(&mesh, "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&[file, "link `arm`", want]),
+        );
+    }
+    // Within the bounds: a 100 km floor and a millimetre scale load.
+    let l = Layout::new();
+    l.write("scene/pkg/meshes/floor.dae", square_dae("1e5"));
+    let scene = l.robot(
+        r#"package://pkg/meshes/floor.dae" scale="0.001 0.001 0.001"#,
+        "",
+    );
+    let before = l.hashes();
+    judge("valid extents", &l, &before, &check(&scene), Expect::Ok);
+}
+
+// ---------------------------------------------------------------- node start-up
+
+#[test]
+fn malformed_remaps_are_errors_before_the_node_starts() {
+    let l = Layout::new();
+    // A parameters file that does not exist: a remap that slipped through would fail on it
+    // instead of starting a DDS participant.
+    let params = l.path("scene/none.yaml");
+    for (name, remap, want) in [
+        ("empty namespace token", "__ns:=/a//b", "no empty token"),
+        ("relative namespace", "__ns:=a", "starts with `/`"),
+        ("trailing slash", "__ns:=/a/", "trailing"),
+        (
+            "namespace token with a digit first",
+            "__ns:=/a/9b",
+            "tokens",
+        ),
+        ("node name with a slash", "__node:=a/b", "node name"),
+        ("empty node name", "__node:=", "node name"),
+    ] {
+        let before = l.hashes();
+        let o = run(&os(&[
+            "node",
+            "--params",
+            s(&params),
+            "--ros-args",
+            "-r",
+            remap,
+        ]));
+        judge(name, &l, &before, &o, Expect::Error(&[remap, want]));
+    }
+}
+
+// ---------------------------------------------------------------- render memory
+
+/// A bag of `frames` cloth frames (two triangles each, moving) at 30 Hz.
+fn long_bag(path: &Path, frames: u64) {
+    use drape::ros::msg::{Marker, Point};
+    let mut bag = BagWriter::create(path).expect("bag");
+    let t = bag
+        .add_topic::<Marker>("/drape/mesh", Distro::Jazzy, None)
+        .expect("topic");
+    for k in 0..frames {
+        let z = 1.0 + 0.1 * (k as f64 * 0.01).sin();
+        let p = |x: f64, y: f64| Point { x, y, z };
+        let m = Marker {
+            r#type: Marker::TRIANGLE_LIST,
+            points: vec![
+                p(0., 0.),
+                p(0.2, 0.),
+                p(0.2, 0.2),
+                p(0., 0.),
+                p(0.2, 0.2),
+                p(0., 0.2),
+            ],
+            ..Marker::default()
+        };
+        bag.write(t, k * 33_333_333, &m).expect("write");
+    }
+    bag.finish().expect("finish");
+}
+
+#[test]
+fn render_memory_does_not_grow_with_frames() {
+    let l = Layout::new();
+    let bag = l.path("scene/long.mcap");
+    long_bag(&bag, 12_000);
+    // Held whole, these 12,000 tiles of 96x96 would take 330 MB (the child may use 200 MB).
+    let gif = l.path("scene/long.gif");
+    let before = l.hashes();
+    let a = os(&["render", s(&bag), "--out", s(&gif), "--size", "96x96"]);
+    let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    let o = drape_with(&a, None, LARGE_BUDGET * SLACK);
+    judge_within(
+        "12,000-frame GIF",
+        &l,
+        &before,
+        &o,
+        Expect::Ok,
+        LARGE_BUDGET,
+    );
+    let bytes = std::fs::read(&gif).unwrap_or_default();
+    let frames = bytes.windows(2).filter(|w| w == &[0x21, 0xF9]).count();
+    assert!(report_only() || frames >= 12_000, "{frames} frame headers");
+    // Two bags side by side, and a strip and the last frame as PNG sheets.
+    for (k, args) in [
+        vec![
+            "render",
+            s(&bag),
+            s(&bag),
+            "--size",
+            "32x32",
+            "--frames",
+            "50",
+            "--out",
+        ],
+        vec!["render", s(&bag), "--frames", "8", "--out"],
+        vec!["render", s(&bag), "--at", "300,1,100", "--out"],
+        vec!["render", s(&bag), "--out"],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = l.path(&format!(
+            "scene/t{k}.{}",
+            if k == 0 { "gif" } else { "png" }
+        ));
+        let before = l.hashes();
+        let mut args = os(&args);
+        args.push(out.clone().into_os_string());
+        let o = run(&args);
+        judge("long bag", &l, &before, &o, Expect::Ok);
+    }
+    let png = l.path("scene/big.png");
+    // A sheet of more tiles than it may hold is refused before any is drawn.
+    let before = l.hashes();
+    let o = run(&os(&[
+        "render",
+        s(&bag),
+        "--out",
+        s(&png),
+        "--frames",
+        "1000000",
+    ]));
+    judge(
+        "huge sheet",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["tiles", "--frames"]),
+    );
+}
+
+// ---------------------------------------------------------------- collect and job locks
+
+/// The manifest's entries by index: (status, error).
+fn manifest(out: &Path) -> Vec<(String, String)> {
+    std::fs::read_to_string(out.join("manifest.jsonl"))
+        .expect("manifest")
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json line");
+            (
+                v["status"].as_str().unwrap_or("").to_string(),
+                v["error"].as_str().unwrap_or("").to_string(),
+            )
+        })
+        .collect()
+}
+
+fn edit_json(path: &Path, f: impl FnOnce(&mut serde_json::Value)) {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("json");
+    f(&mut v);
+    std::fs::write(path, serde_json::to_string(&v).expect("json")).expect("write");
+}
+
+#[test]
+fn collect_verifies_what_it_reads() {
+    let l = Layout::new();
+    let sweep = sweep_yaml(&l, "samples: 5\n");
+    let out = l.path("scene/out");
+    for i in 0..5 {
+        let o = run(&os(&[
+            "sweep",
+            "run",
+            s(&sweep),
+            "--index",
+            &i.to_string(),
+            "--quiet",
+        ]));
+        assert_eq!(o.code, Some(0), "{}", o.stderr);
+    }
+    let rec = |i: usize| out.join(format!("jobs/{i:06}.json"));
+    // Job 1's record claims job 2's index; job 2's names a bag far outside the sweep; job 3's
+    // bag is corrupted in place at the same size; job 4's record is not a record.
+    edit_json(&rec(1), |v| v["index"] = 2.into());
+    edit_json(&rec(2), |v| v["bag"] = "../../../../etc/passwd".into());
+    let bag3 = out.join("jobs/000003.mcap");
+    let mut bytes = std::fs::read(&bag3).expect("bag");
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&bag3, &bytes).expect("write");
+    std::fs::write(rec(4), "{ not json").expect("write");
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge("collect", &l, &before, &o, Expect::Ok);
+    let m = manifest(&out);
+    let want = [
+        ("ok", ""),
+        ("failed", "claims job 2"),
+        ("failed", "../../../../etc/passwd"),
+        ("ok", ""),
+        ("failed", "not a job record"),
+    ];
+    for (i, (status, why)) in want.iter().enumerate() {
+        assert_eq!(m[i].0, *status, "job {i}: {:?}", m[i]);
+        assert!(m[i].1.contains(why), "job {i}: {:?}", m[i]);
+    }
+    // With --verify the corrupted bag is found.
+    let o = run(&os(&["sweep", "collect", s(&out), "--verify"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let m = manifest(&out);
+    assert_eq!(m[3].0, "failed");
+    assert!(m[3].1.contains("SHA-256"), "{:?}", m[3]);
+    assert_eq!(m[0].0, "ok");
+    // A rerun of the corrupted job redoes it instead of skipping it.
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "3", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert_ne!(
+        std::fs::read(&bag3).expect("bag"),
+        bytes,
+        "job 3 was skipped"
+    );
+    // A local rerun redoes every job that is not done, a bag changed in place included.
+    let bag0 = out.join("jobs/000000.mcap");
+    let mut b0 = std::fs::read(&bag0).expect("bag");
+    let mid = b0.len() / 2;
+    b0[mid] ^= 0xff;
+    std::fs::write(&bag0, &b0).expect("write");
+    let o = run(&os(&["sweep", "run", s(&sweep), "--local", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let o = run(&os(&["sweep", "collect", s(&out), "--verify"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(
+        manifest(&out).iter().all(|(st, _)| st == "ok"),
+        "{:?}",
+        manifest(&out)
+    );
+
+    // A plan listing a job three times, or with a wrong job count, is refused.
+    let plan = out.join("plan.json");
+    let good = std::fs::read_to_string(&plan).expect("plan");
+    edit_json(&plan, |v| {
+        let j0 = v["jobs"][0].clone();
+        v["jobs"] = serde_json::Value::Array(vec![j0.clone(), j0.clone(), j0]);
+        v["job_count"] = 3.into();
+    });
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan with a repeated job",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "once"]),
+    );
+    std::fs::write(&plan, &good).expect("write");
+    edit_json(&plan, |v| v["job_count"] = 7.into());
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "collect", s(&out)]));
+    judge(
+        "plan with a wrong count",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["plan.json", "job_count"]),
+    );
+}
+
+#[test]
+fn one_job_runs_once_at_a_time() {
+    use std::os::unix::io::AsRawFd;
+    let l = Layout::new();
+    let sweep = sweep_yaml(&l, "samples: 2\n");
+    let out = l.path("scene/out");
+    std::fs::create_dir_all(out.join("jobs")).expect("mkdir");
+    // This process stands for a first attempt still running: it holds job 0's lock.
+    let lock = std::fs::File::create(out.join("jobs/000000.lock")).expect("lock");
+    assert_eq!(
+        unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) },
+        0
+    );
+    let before = l.hashes();
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    judge(
+        "second attempt",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["job 0", "already running", "000000.lock"]),
+    );
+    assert!(report_only() || !out.join("jobs/000000.json").exists());
+    // Another job runs meanwhile, and job 0 runs once the lock is released.
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "1", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    drop(lock);
+    let o = run(&os(&["sweep", "run", s(&sweep), "--index", "0", "--quiet"]));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(out.join("jobs/000000.mcap").is_file());
+}
+
+// ---------------------------------------------------------------- large meshes, NaN frames
+
+/// A Collada file whose node `n{depth}` instances `n{depth-1}` twice, down to `n0`, which
+/// places an eight-triangle geometry (or nothing): 2^depth copies.
+fn instancing_bomb(depth: usize, geometry: bool) -> String {
+    let mut nodes = String::from(if geometry {
+        r##"<node id="n0"><instance_geometry url="#g"/></node>"##
+    } else {
+        r##"<node id="n0"/>"##
+    })
+    .to_string();
+    for k in 1..=depth {
+        nodes.push_str(&format!(
+            r##"<node id="n{k}"><instance_node url="#n{p}"/><instance_node url="#n{p}"/></node>"##,
+            p = k - 1
+        ));
+    }
+    format!(
+        r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 0.1 0 0 0 0.1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3"/></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="8"><input semantic="VERTEX" source="#v" offset="0"/><p>{tris}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_nodes>{nodes}</library_nodes>
+  <library_visual_scenes><visual_scene id="s"><node id="top"><instance_node url="#n{depth}"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##,
+        tris = "0 1 2 ".repeat(8)
+    )
+}
+
+#[test]
+fn meshes_are_bounded_after_instancing() {
+    for (name, text, want) in [
+        (
+            "2^30 instanced triangles",
+            instancing_bomb(30, true),
+            "instance",
+        ),
+        (
+            "2^30 empty node visits",
+            instancing_bomb(30, false),
+            "nodes",
+        ),
+    ] {
+        let l = Layout::new();
+        l.write("scene/pkg/meshes/bomb.dae", &text);
+        let scene = l.robot("package://pkg/meshes/bomb.dae", "");
+        let before = l.hashes();
+        let o = check(&scene);
+        judge(
+            name,
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["bomb.dae", "link `arm`", want]),
+        );
+    }
+    // A binary STL of 2,000,001 triangles (100 MB, within the mesh file cap) is refused from
+    // its header, before any triangle is built.
+    let l = Layout::new();
+    let stl = l.sparse("scene/pkg/meshes/big.stl", 84 + 50 * 2_000_001);
+    {
+        use std::io::{Seek, SeekFrom, Write};
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&stl)
+            .expect("open");
+        f.seek(SeekFrom::Start(80)).expect("seek");
+        f.write_all(&2_000_001u32.to_le_bytes()).expect("write");
+    }
+    let scene = l.robot("package://pkg/meshes/big.stl", "");
+    let before = l.hashes();
+    let o = check(&scene);
+    judge(
+        "2,000,001-triangle STL",
+        &l,
+        &before,
+        &o,
+        Expect::Error(&["big.stl", "2000001 triangles"]),
+    );
+}
+
+#[test]
+fn a_non_finite_cloth_frame_is_an_error_not_a_blank_picture() {
+    use drape::ros::msg::{Marker, Point};
+    let l = Layout::new();
+    let bag = l.path("scene/nan.mcap");
+    let mut w = BagWriter::create(&bag).expect("bag");
+    let t = w
+        .add_topic::<Marker>("/drape/mesh", Distro::Jazzy, None)
+        .expect("topic");
+    for k in 0..3u64 {
+        let z = if k == 2 { f64::NAN } else { 1.0 };
+        let p = |x: f64, y: f64| Point { x, y, z };
+        let m = Marker {
+            r#type: Marker::TRIANGLE_LIST,
+            points: vec![p(0., 0.), p(0.2, 0.), p(0.2, 0.2)],
+            ..Marker::default()
+        };
+        w.write(t, k * 33_333_333, &m).expect("write");
+    }
+    w.finish().expect("finish");
+    for out in ["scene/nan.png", "scene/nan.gif"] {
+        let out = l.path(out);
+        let before = l.hashes();
+        let o = run(&os(&["render", s(&bag), "--out", s(&out)]));
+        judge(
+            "NaN frame",
+            &l,
+            &before,
+            &o,
+            Expect::Error(&["nan.mcap", "0.067 s", "non-finite"]),
+        );
+        assert!(report_only() || !out.exists());
+    }
+    // Frames before it still render.
+    let out = l.path("scene/first.png");
+    let before = l.hashes();
+    let o = run(&os(&["render", s(&bag), "--out", s(&out), "--at", "0"]));
+    judge("finite frame of the same bag", &l, &before, &o, Expect::Ok);
 }

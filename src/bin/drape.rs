@@ -312,8 +312,7 @@ fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
         );
         outcomes.push(o);
     }
-    std::fs::write(&out, markdown(&outcomes, res))
-        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", out.display()))?;
+    drape::output::write(&out, markdown(&outcomes, res).as_bytes(), &[])?;
     let failed: Vec<&str> = outcomes
         .iter()
         .filter(|o| !o.passed())
@@ -386,6 +385,14 @@ fn record(args: RecordArgs) -> Result<()> {
     // the bag while recording.
     install_stop_handler(false)?;
     let scene = drape::scene::Scene::load(&scene_path)?;
+    // The summary goes through the same output rules as the bag; checked before the run so
+    // that a summary naming an input (or the bag) fails before anything is simulated.
+    if let Some(file) = &summary_file {
+        let mut also = vec![out.as_path()];
+        also.extend(joints.as_deref());
+        drape::output::check(file, &also)
+            .with_context(|| format!("--summary {}", file.display()))?;
+    }
     if let Some(d) = duration {
         scene
             .check_run_length(d)
@@ -463,7 +470,7 @@ fn record(args: RecordArgs) -> Result<()> {
     let run = summary.run_summary();
     print!("{}", run.table());
     if let Some(file) = summary_file {
-        std::fs::write(&file, run.to_json() + "\n")
+        drape::output::write(&file, (run.to_json() + "\n").as_bytes(), &[&out])
             .with_context(|| format!("--summary {}", file.display()))?;
     }
     Ok(())
@@ -478,6 +485,14 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
     use std::sync::Arc;
 
     let ra = parse_ros_args(&ros_args)?;
+    // Checked here, before any DDS participant exists: ros2-client accepts some malformed
+    // names at first and fails on them later.
+    if let Some(ns) = &ra.namespace {
+        check_ros_name(ns, true).map_err(|why| anyhow::anyhow!("-r __ns:={ns}: {why}"))?;
+    }
+    if let Some(n) = &ra.node_name {
+        check_ros_name(n, false).map_err(|why| anyhow::anyhow!("-r __node:={n}: {why}"))?;
+    }
     let name = ra.node_name.clone().unwrap_or_else(|| "drape".to_string());
     let file = ra.params_files.last().cloned().or(params).ok_or_else(|| {
         anyhow::anyhow!("no parameters: pass --params FILE or --ros-args --params-file FILE")
@@ -487,6 +502,10 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         p.namespace = ns;
     }
     p.apply_overrides(&ra.overrides)?;
+    check_ros_name(&p.namespace, true)
+        .map_err(|why| anyhow::anyhow!("{}: namespace {:?}: {why}", file.display(), p.namespace))?;
+    check_ros_name(&p.name, false)
+        .map_err(|why| anyhow::anyhow!("{}: node name {:?}: {why}", file.display(), p.name))?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     // The stop flag ends the run loop; the cancellation flag ends a scene build in progress
@@ -503,4 +522,33 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         s.joint_states_received
     );
     Ok(())
+}
+
+/// A ROS 2 namespace (`/`, or `/` then tokens joined by single `/`, no trailing `/`) or node
+/// name (one token); a token is a letter or `_`, then letters, digits and `_`.
+#[cfg(feature = "ros")]
+fn check_ros_name(name: &str, namespace: bool) -> std::result::Result<(), &'static str> {
+    let token = |t: &str| {
+        let mut c = t.chars();
+        matches!(c.next(), Some(f) if f.is_ascii_alphabetic() || f == '_')
+            && c.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    if !namespace {
+        return if token(name) {
+            Ok(())
+        } else {
+            Err("a node name is a letter or `_` then letters, digits and `_`")
+        };
+    }
+    if name == "/" {
+        return Ok(());
+    }
+    let Some(rest) = name.strip_prefix('/') else {
+        return Err("a namespace starts with `/`");
+    };
+    if rest.split('/').all(token) {
+        Ok(())
+    } else {
+        Err("a namespace is `/`-separated tokens (a letter or `_` then letters, digits and `_`), with no empty token (`//`) and no trailing `/`")
+    }
 }

@@ -13,6 +13,9 @@ use std::path::Path;
 
 /// `instance_node` references can form cycles; stop following them beyond this depth.
 const MAX_NODE_DEPTH: usize = 64;
+/// Most node visits of a scene: nodes that instance each other twice per level reach 2^30
+/// visits at depth 30, with or without geometry.
+const MAX_NODE_VISITS: usize = 1_000_000;
 
 pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
     let root = xml::parse(bytes).map_err(|source| MeshError::Xml {
@@ -40,6 +43,10 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         };
         let id = g.attr("id").unwrap_or("");
         let data = read_mesh(mesh).map_err(|e| collada(path, Some(id), e))?;
+        if all.indices.len() + data.indices.len() > super::limits::MAX_TRIANGLES {
+            let max = super::limits::MAX_TRIANGLES;
+            return Err(collada(path, Some(id), DaeError::TooManyTriangles { max }));
+        }
         all.append(&data);
         geometries.insert(id, data);
     }
@@ -57,6 +64,7 @@ pub(super) fn parse_dae(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
             geometries: &geometries,
             nodes: &nodes,
             out: &mut scene_mesh,
+            visits: 0,
         };
         for node in scene.children_named("node") {
             ctx.visit(node, DMat4::IDENTITY, 0)
@@ -137,6 +145,7 @@ struct SceneCtx<'a, 'b> {
     geometries: &'a HashMap<&'a str, TriMeshData>,
     nodes: &'a HashMap<&'a str, &'a Element>,
     out: &'b mut TriMeshData,
+    visits: usize,
 }
 
 impl SceneCtx<'_, '_> {
@@ -144,6 +153,12 @@ impl SceneCtx<'_, '_> {
         if depth > MAX_NODE_DEPTH {
             return Err(DaeError::NodeDepth {
                 max: MAX_NODE_DEPTH,
+            });
+        }
+        self.visits += 1;
+        if self.visits > MAX_NODE_VISITS {
+            return Err(DaeError::TooManyNodes {
+                max: MAX_NODE_VISITS,
             });
         }
         let mut m = parent;
@@ -185,6 +200,13 @@ impl SceneCtx<'_, '_> {
                         .ok_or_else(|| DaeError::UnknownGeometry {
                             url: url.to_owned(),
                         })?;
+                    // Counted before copying: nodes that instance each other a few times per
+                    // level multiply the triangles exponentially with the depth.
+                    if self.out.indices.len() + g.indices.len() > super::limits::MAX_TRIANGLES {
+                        return Err(DaeError::TooManyTriangles {
+                            max: super::limits::MAX_TRIANGLES,
+                        });
+                    }
                     let mut placed = g.clone();
                     for v in &mut placed.vertices {
                         *v = m.transform_point3(*v);

@@ -58,6 +58,11 @@ pub enum DaeError {
     IndexOutOfRange { index: usize, positions: usize },
     #[error("<{primitive}> primitives are not supported")]
     Unsupported { primitive: String },
+    /// The scene's instancing places more triangles than a mesh may have.
+    #[error("the scene places more than {max} triangles (instance_node and instance_geometry multiply them)")]
+    TooManyTriangles { max: usize },
+    #[error("the scene visits more than {max} nodes (instance_node multiplies them)")]
+    TooManyNodes { max: usize },
     #[error("<vcount> sum overflows")]
     VcountOverflow,
 }

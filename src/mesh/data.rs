@@ -2,6 +2,7 @@
 //! consumer relies on (checked by [`validate`]).
 
 use super::error::MeshError;
+use super::limits::MAX_COORDINATE;
 use crate::Vec3;
 use std::path::Path;
 
@@ -14,7 +15,7 @@ pub struct TriMeshData {
 }
 
 /// Checks the invariants every consumer relies on: at least one triangle, indices in range,
-/// finite coordinates.
+/// finite coordinates within [`MAX_COORDINATE`].
 pub fn validate(path: &Path, mesh: &TriMeshData) -> Result<(), MeshError> {
     if mesh.indices.is_empty() || mesh.vertices.is_empty() {
         return Err(MeshError::Empty {
@@ -25,6 +26,14 @@ pub fn validate(path: &Path, mesh: &TriMeshData) -> Result<(), MeshError> {
         return Err(MeshError::NonFinite {
             path: path.to_path_buf(),
             index,
+        });
+    }
+    let far = |v: &Vec3| v.abs().max_element() > MAX_COORDINATE;
+    if let Some(index) = mesh.vertices.iter().position(far) {
+        return Err(MeshError::TooFar {
+            path: path.to_path_buf(),
+            index,
+            value: mesh.vertices[index].abs().max_element(),
         });
     }
     validate_indices(path, mesh)

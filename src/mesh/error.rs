@@ -41,6 +41,8 @@ pub enum MeshError {
         needed: u64,
         len: usize,
     },
+    #[error("mesh {path}: {count} triangles, more than the {max} a mesh may have (simplify it)", max = super::limits::MAX_TRIANGLES)]
+    TooManyTriangles { path: PathBuf, count: u64 },
     #[error("mesh {path}: {vertices} vertices are too many for u32 indices")]
     TooManyVertices { path: PathBuf, vertices: usize },
     /// A Collada file that is not well-formed XML (the parser's error is the source).
@@ -75,6 +77,12 @@ pub enum MeshError {
     },
     #[error("mesh {path}: vertex {index} has a non-finite coordinate")]
     NonFinite { path: PathBuf, index: usize },
-    #[error("mesh {path}: scale {scale} must be finite and non-zero on every axis")]
+    #[error("mesh {path}: vertex {index} is {value:e} m from the origin on one axis, beyond the {max:e} m allowed", max = super::limits::MAX_COORDINATE)]
+    TooFar {
+        path: PathBuf,
+        index: usize,
+        value: f64,
+    },
+    #[error("mesh {path}: scale [{:?}, {:?}, {:?}] must be finite, with every component between {min:e} and {max:e} in size", scale.x, scale.y, scale.z, min = super::limits::MIN_SCALE, max = super::limits::MAX_SCALE)]
     BadScale { path: PathBuf, scale: Vec3 },
 }

@@ -7,6 +7,7 @@ mod dae;
 mod dae_error;
 mod data;
 mod error;
+mod limits;
 mod obj;
 mod simplify;
 mod stl;
@@ -15,6 +16,7 @@ mod xml;
 pub use dae_error::DaeError;
 pub use data::{convex_hull, validate, TriMeshData};
 pub use error::MeshError;
+pub use limits::{MAX_COORDINATE, MAX_SCALE, MAX_TRIANGLES, MIN_SCALE};
 pub use simplify::simplify;
 pub use xml::XmlError;
 
@@ -23,12 +25,15 @@ use std::path::{Path, PathBuf};
 
 /// Loads a mesh, dispatching on the (case-insensitive) extension, and multiplies every vertex
 /// by `scale` component-wise. A scale with an odd number of negative components mirrors the
-/// mesh, so triangle winding is flipped to keep outward normals outward.
+/// mesh, so triangle winding is flipped to keep outward normals outward. Each scale component
+/// must be finite with a magnitude in [`MIN_SCALE`]..=[`MAX_SCALE`], and every scaled vertex
+/// within [`MAX_COORDINATE`] of the origin on each axis.
 ///
 /// The file is read through [`crate::input::read_bytes`] (regular files only, size cap). Callers
 /// that take the path from outside check where it points first (see [`load_mesh_within`]).
 pub fn load_mesh(path: &Path, scale: Vec3) -> Result<TriMeshData, MeshError> {
-    if !scale.is_finite() || scale.x == 0.0 || scale.y == 0.0 || scale.z == 0.0 {
+    let in_range = |c: f64| (MIN_SCALE..=MAX_SCALE).contains(&c.abs());
+    if !(in_range(scale.x) && in_range(scale.y) && in_range(scale.z)) {
         return Err(MeshError::BadScale {
             path: path.to_path_buf(),
             scale,

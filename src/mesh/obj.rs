@@ -20,6 +20,13 @@ pub(super) fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
         path: path.to_path_buf(),
         source,
     })?;
+    let count: u64 = models.iter().map(|m| m.mesh.indices.len() as u64 / 3).sum();
+    if count > super::limits::MAX_TRIANGLES as u64 {
+        return Err(MeshError::TooManyTriangles {
+            path: path.to_path_buf(),
+            count,
+        });
+    }
     let mut mesh = TriMeshData::default();
     for model in &models {
         let m = &model.mesh;

@@ -39,6 +39,12 @@ pub(super) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshEr
             len: bytes.len(),
         });
     }
+    if n > super::limits::MAX_TRIANGLES as u64 {
+        return Err(MeshError::TooManyTriangles {
+            path: path.to_path_buf(),
+            count: n,
+        });
+    }
     let n = n as usize;
     let mut mesh = TriMeshData {
         vertices: Vec::with_capacity(n.min(1 << 20)),
@@ -78,6 +84,12 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<TriMeshData, MeshError> {
         .iter()
         .map(|v| Vec3::new(v.0[0] as f64, v.0[1] as f64, v.0[2] as f64))
         .collect();
+    if indexed.faces.len() > super::limits::MAX_TRIANGLES {
+        return Err(MeshError::TooManyTriangles {
+            path: path.to_path_buf(),
+            count: indexed.faces.len() as u64,
+        });
+    }
     let mut indices = Vec::with_capacity(indexed.faces.len());
     let too_many = || MeshError::TooManyVertices {
         path: path.to_path_buf(),

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 /// The part of a `visualization_msgs/msg/Marker` the renderer needs: everything up to `points`
 /// (CDR is read in order, the rest of the message is ignored).
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub(super) struct MarkerHead {
+pub(crate) struct MarkerHead {
     pub header: Header,
     pub ns: String,
     pub id: i32,

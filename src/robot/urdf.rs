@@ -78,6 +78,15 @@ pub enum RobotError {
         value: f64,
         max: f64,
     },
+    /// A `<limit>` attribute that is not finite, out of order or negative where it cannot be.
+    #[error("{origin}: joint `{joint}`: <limit {attribute}=\"{value:?}\">: {why}")]
+    BadLimit {
+        origin: String,
+        joint: String,
+        attribute: &'static str,
+        value: f64,
+        why: &'static str,
+    },
     #[error("link `{link}`: mesh `{uri}` not found; tried: {}", display_paths(.tried))]
     MeshNotFound {
         link: String,
@@ -122,6 +131,48 @@ fn display_paths(paths: &[PathBuf]) -> String {
         .map(|p| p.display().to_string())
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// Largest joint limit accepted (rad or m for positions, per second for velocities, N or N m
+/// for efforts); larger ones are typos or attacks, not robots.
+pub const MAX_LIMIT: f64 = 1e6;
+
+/// Every joint's `<limit>`: finite, at most [`MAX_LIMIT`] in size, `lower <= upper`, velocity
+/// and effort not negative. The parser fills an absent `<limit>` with zeros, which passes.
+fn check_limits(urdf: &urdf_rs::Robot, origin: &str) -> Result<(), RobotError> {
+    for j in &urdf.joints {
+        let l = &j.limit;
+        let bad = |attribute, value, why| RobotError::BadLimit {
+            origin: origin.to_string(),
+            joint: j.name.clone(),
+            attribute,
+            value,
+            why,
+        };
+        for (attribute, value) in [
+            ("lower", l.lower),
+            ("upper", l.upper),
+            ("velocity", l.velocity),
+            ("effort", l.effort),
+        ] {
+            if !value.is_finite() {
+                return Err(bad(attribute, value, "must be a finite number"));
+            }
+            if value.abs() > MAX_LIMIT {
+                return Err(bad(attribute, value, "is larger than 1e6 in size"));
+            }
+        }
+        if l.lower > l.upper {
+            return Err(bad("lower", l.lower, "is above upper"));
+        }
+        if l.velocity < 0.0 {
+            return Err(bad("velocity", l.velocity, "must not be negative"));
+        }
+        if l.effort < 0.0 {
+            return Err(bad("effort", l.effort, "must not be negative"));
+        }
+    }
+    Ok(())
 }
 
 /// A streaming pass over the XML: nesting depth at most [`MAX_XML_DEPTH`] and a `<robot>` root,
@@ -224,6 +275,7 @@ fn build(
         source,
     })?;
     check_mimics(&urdf, origin)?;
+    check_limits(&urdf, origin)?;
     let links: Vec<String> = urdf.links.iter().map(|l| l.name.clone()).collect();
     let specs = urdf
         .joints

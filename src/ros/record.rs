@@ -126,12 +126,14 @@ pub enum RecordError {
     #[error("publish rate must be finite and > 0 (got {value})")]
     PublishRate { value: f64 },
     /// `--out` names a file the run reads (the same file by device and inode).
-    #[error("{}: is the {kind} this run reads ({}); refusing to overwrite it", .out.display(), .input.display())]
+    #[error("{}: is {kind} ({}); refusing to overwrite it", .out.display(), .input.display())]
     OntoInput {
         out: PathBuf,
         input: PathBuf,
-        kind: crate::input::InputKind,
+        kind: String,
     },
+    #[error(transparent)]
+    Output(crate::output::OutputError),
     #[error("{}: is a directory", .out.display())]
     OutIsDirectory { out: PathBuf },
     /// A value about to be written is NaN or infinite; the run stops instead.
@@ -153,32 +155,23 @@ pub enum RecordError {
 }
 
 /// Where the bag is written while recording: a hidden file beside `out`, renamed at the end;
-/// or `out` itself when it is an existing device or FIFO (a stream, e.g. `/dev/stdout`).
+/// or `out` itself when it is an existing device or FIFO (a stream, e.g. `/dev/stdout`). The
+/// rules are [`crate::output`]'s.
 fn staging_path(out: &Path) -> Result<Option<PathBuf>, RecordError> {
-    if let Some(input) = crate::input::is_an_input(out) {
-        return Err(RecordError::OntoInput {
+    use crate::output::{check, OutputError, Target};
+    match check(out, &[]) {
+        Ok(Target::Staged { tmp }) => Ok(Some(tmp)),
+        Ok(Target::Stream) => Ok(None),
+        Err(OutputError::IsDirectory { .. }) => Err(RecordError::OutIsDirectory {
             out: out.to_path_buf(),
-            input: input.path,
-            kind: input.kind,
-        });
+        }),
+        Err(OutputError::OntoInput { input, kind, .. }) => Err(RecordError::OntoInput {
+            out: out.to_path_buf(),
+            input,
+            kind,
+        }),
+        Err(other) => Err(RecordError::Output(other)),
     }
-    match std::fs::metadata(out) {
-        Ok(m) if m.is_dir() => {
-            return Err(RecordError::OutIsDirectory {
-                out: out.to_path_buf(),
-            })
-        }
-        Ok(m) if !m.is_file() => return Ok(None),
-        _ => {}
-    }
-    let name = out.file_name().map_or_else(
-        || std::ffi::OsString::from("bag"),
-        std::ffi::OsStr::to_os_string,
-    );
-    let mut tmp = std::ffi::OsString::from(".");
-    tmp.push(&name);
-    tmp.push(format!(".partial-{}", std::process::id()));
-    Ok(Some(out.with_file_name(tmp)))
 }
 
 struct Topics {

@@ -14,6 +14,17 @@ pub enum StudyError {
         source: std::io::Error,
     },
     #[error(transparent)]
+    Input(#[from] crate::input::InputError),
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    /// A cached reference holds a value that no run writes (NaN or infinite).
+    #[error("{}: cached reference: {what} of sample {sample} is not finite (delete the file to recompute it)", path.display())]
+    BadCache {
+        path: PathBuf,
+        what: String,
+        sample: usize,
+    },
+    #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
     #[error(
         "reference for scene '{scene}' at resolution {n}: RK4 diverged down to dt level {dt_level}"

@@ -5,10 +5,7 @@ use super::{RunRecord, StudyError};
 use std::path::PathBuf;
 
 pub(super) fn write(path: PathBuf, text: &str) -> Result<PathBuf, StudyError> {
-    std::fs::write(&path, text).map_err(|source| StudyError::Io {
-        path: path.clone(),
-        source,
-    })?;
+    crate::output::write(&path, text.as_bytes(), &[])?;
     Ok(path)
 }
 

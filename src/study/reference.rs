@@ -114,15 +114,22 @@ fn write(path: &Path, head: &str, r: &Reference) -> Result<(), StudyError> {
             }
         }
     }
-    std::fs::write(path, bytes).map_err(io_err(path))
+    Ok(crate::output::write(path, &bytes, &[])?)
 }
 
-/// Reads a cached reference; `None` if absent, stale or malformed (it is then recomputed).
+/// Reads a cached reference; `None` if absent, stale or of the wrong length (it is then
+/// recomputed). The file is read through [`crate::input`] (a regular file under the cache's
+/// cap); the length the header implies is computed with overflow checks and compared with the
+/// bytes present before anything is allocated, and a non-finite value is an error naming it.
 fn read(path: &Path, head: &str, samples: usize) -> Result<Option<Reference>, StudyError> {
-    let bytes = match std::fs::read(path) {
+    let bytes = match crate::input::read_bytes(path, crate::input::InputKind::StudyCache) {
         Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(io_err(path)(e)),
+        Err(crate::input::InputError::Open { source, .. })
+            if source.kind() == std::io::ErrorKind::NotFound =>
+        {
+            return Ok(None)
+        }
+        Err(e) => return Err(e.into()),
     };
     let Some(nl) = bytes.iter().position(|&b| b == b'\n') else {
         return Ok(None);
@@ -141,25 +148,41 @@ fn read(path: &Path, head: &str, samples: usize) -> Result<Option<Reference>, St
         return Ok(None);
     };
     let body = &bytes[nl + 1..];
-    if body.len() != samples * (1 + 3 * vertices) * 8 {
+    let expected = vertices
+        .checked_mul(3)
+        .and_then(|v| v.checked_add(1))
+        .and_then(|v| v.checked_mul(samples))
+        .and_then(|v| v.checked_mul(8));
+    if expected != Some(body.len()) {
         log::warn!("{}: truncated reference, recomputing", path.display());
         return Ok(None);
     }
     let mut vals = body
         .chunks_exact(8)
         .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+    let bad = |what: String, sample: usize| StudyError::BadCache {
+        path: path.to_path_buf(),
+        what,
+        sample,
+    };
     let mut t = Trajectory::default();
-    for _ in 0..samples {
-        t.energy.push(vals.next().unwrap_or(f64::NAN));
-        let xs: Vec<Vec3> = (0..vertices)
-            .map(|_| {
-                let mut c = [0.0; 3];
-                for v in &mut c {
-                    *v = vals.next().unwrap_or(f64::NAN);
-                }
-                Vec3::from_array(c)
-            })
-            .collect();
+    for s in 0..samples {
+        let e = vals.next().unwrap_or(f64::NAN);
+        if !e.is_finite() {
+            return Err(bad("the energy".into(), s));
+        }
+        t.energy.push(e);
+        let mut xs: Vec<Vec3> = Vec::with_capacity(vertices);
+        for v in 0..vertices {
+            let mut c = [0.0; 3];
+            for x in &mut c {
+                *x = vals.next().unwrap_or(f64::NAN);
+            }
+            if !c.iter().all(|x| x.is_finite()) {
+                return Err(bad(format!("vertex {v}"), s));
+            }
+            xs.push(Vec3::from_array(c));
+        }
         t.positions.push(xs);
     }
     Ok(Some(Reference {
@@ -168,4 +191,52 @@ fn read(path: &Path, head: &str, samples: usize) -> Result<Option<Reference>, St
         vertices,
         cached: true,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cache(dir: &Path, head: &str, fields: &str, body: &[f64]) -> PathBuf {
+        let p = dir.join("c.ref");
+        let mut bytes = format!("{head} {fields}\n").into_bytes();
+        for v in body {
+            bytes.extend(v.to_le_bytes());
+        }
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    #[test]
+    fn hostile_caches_are_refused_or_recomputed() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "drape-study-reference v2 scene=x";
+        // Two samples of one vertex: energy, x, y, z each.
+        let good = [1.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.5];
+        let p = cache(dir.path(), head, "level=3 vertices=1", &good);
+        let r = read(&p, head, 2).unwrap().unwrap();
+        assert_eq!(r.trajectory.positions[1][0].z, 0.5);
+        // A NaN sample is an error naming the file and the sample.
+        let mut nan = good;
+        nan[7] = f64::NAN;
+        let p = cache(dir.path(), head, "level=3 vertices=1", &nan);
+        let e = read(&p, head, 2).unwrap_err().to_string();
+        assert!(
+            e.contains("c.ref") && e.contains("vertex 0 of sample 1"),
+            "{e}"
+        );
+        // A header claiming 2^61 vertices neither panics nor allocates: recomputed.
+        let p = cache(
+            dir.path(),
+            head,
+            "level=3 vertices=2305843009213693952",
+            &good,
+        );
+        assert!(read(&p, head, 2).unwrap().is_none());
+        // A FIFO or a device in its place is refused, not read.
+        let e = read(Path::new("/dev/zero"), head, 2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("/dev/zero"), "{e}");
+    }
 }

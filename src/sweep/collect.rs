@@ -3,11 +3,13 @@
 //!
 //! The output folder's `plan.json` (written by every `sweep run` and `sweep emit`) says which
 //! jobs exist, so jobs that never ran appear too: `missing`, or `failed` with the reason when a
-//! partial bag or a failed record is there. An `ok` record whose bag is gone or has another size
-//! is `failed` too.
+//! partial bag or a failed record is there. The plan must list each job once, in order; an `ok`
+//! record is `failed` when it claims another job's index, names a bag other than its job's own
+//! `jobs/I.mcap`, or its bag is gone or has another size (or, with `--verify`, another
+//! SHA-256); an unreadable record is `failed` with the reason. Every `failed` entry says why.
 
 use super::error::SweepError;
-use super::job::{params_json, write_atomic, JobFiles, JobRecord, Status};
+use super::job::{params_json, JobFiles, JobRecord, Status};
 use super::plan::{Job, Sweep};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -22,25 +24,56 @@ pub struct PlanFile {
     pub jobs: Vec<Job>,
 }
 
-/// Writes `plan.json` into `out` (atomically; concurrent writers write the same text).
+/// Writes `plan.json` into `out` (through [`crate::output`]; concurrent writers write the same
+/// text). The jobs are computed and written one at a time, so the plan is never held whole in
+/// memory, and the file is refused once it passes the sweep plan's size cap.
 pub fn write_plan(sweep: &Sweep, out: &Path) -> Result<PathBuf, SweepError> {
+    use std::io::Write;
     std::fs::create_dir_all(out).map_err(|source| SweepError::Io {
         path: out.to_path_buf(),
         source,
     })?;
-    let plan = PlanFile {
-        name: sweep.name.clone(),
-        sweep: sweep.path.clone(),
-        scene: sweep.scene_path.clone(),
-        job_count: sweep.job_count(),
-        jobs: sweep.jobs().collect(),
-    };
     let path = out.join("plan.json");
-    let text = serde_json::to_string(&plan).map_err(|source| SweepError::Encode {
-        what: "the plan".into(),
+    let also = [sweep.path.as_path(), sweep.scene_path.as_path()];
+    let mut file = crate::output::Output::create(&path, &also)?;
+    let cap = crate::input::InputKind::SweepPlan.cap();
+    let encode = |what: &str, source| SweepError::Encode {
+        what: what.to_string(),
         source,
-    })?;
-    write_atomic(&path, &(text + "\n"))?;
+    };
+    let io = |source| SweepError::Io {
+        path: path.clone(),
+        source,
+    };
+    let head = serde_json::json!({
+        "name": sweep.name,
+        "sweep": sweep.path,
+        "scene": sweep.scene_path,
+        "job_count": sweep.job_count(),
+    });
+    // The fields in `PlanFile`'s order, then the jobs.
+    let mut text = String::from("{");
+    for key in ["name", "sweep", "scene", "job_count"] {
+        let v = serde_json::to_string(&head[key]).map_err(|e| encode("the plan", e))?;
+        text.push_str(&format!("\"{key}\":{v},"));
+    }
+    text.push_str("\"jobs\":[");
+    file.write_all(text.as_bytes()).map_err(io)?;
+    let mut written = text.len() as u64;
+    for (k, job) in sweep.jobs().enumerate() {
+        let mut line = if k == 0 { String::new() } else { ",".into() };
+        line.push_str(
+            &serde_json::to_string(&job)
+                .map_err(|e| encode(&format!("job {} of the plan", job.index), e))?,
+        );
+        written += line.len() as u64;
+        if written > cap {
+            return Err(SweepError::PlanTooLarge { path, cap });
+        }
+        file.write_all(line.as_bytes()).map_err(io)?;
+    }
+    file.write_all(b"]}\n").map_err(io)?;
+    file.finish()?;
     Ok(path)
 }
 
@@ -60,18 +93,38 @@ impl Manifest {
 
 /// Merges the job records of `out` into `manifest.jsonl` and `manifest.csv` there.
 pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
+    collect_with(out, false)
+}
+
+/// [`collect`]; with `verify`, each `ok` job's bag is also hashed and compared with the
+/// SHA-256 its record holds.
+pub fn collect_with(out: &Path, verify: bool) -> Result<Manifest, SweepError> {
     let plan_path = out.join("plan.json");
-    let text = std::fs::read_to_string(&plan_path).map_err(|source| SweepError::Io {
-        path: plan_path.clone(),
-        source,
-    })?;
+    let text = crate::input::read_text(&plan_path, crate::input::InputKind::SweepPlan)?;
     let plan: PlanFile = serde_json::from_str(&text).map_err(|source| SweepError::Json {
         origin: plan_path.display().to_string(),
         source,
     })?;
+    let bad_plan = |why: String| SweepError::BadPlan {
+        path: plan_path.clone(),
+        why,
+    };
+    if plan.jobs.len() != plan.job_count {
+        return Err(bad_plan(format!(
+            "job_count is {} but {} jobs are listed",
+            plan.job_count,
+            plan.jobs.len()
+        )));
+    }
+    if let Some((pos, job)) = plan.jobs.iter().enumerate().find(|(k, j)| j.index != *k) {
+        return Err(bad_plan(format!(
+            "entry {pos} of jobs is job {} (each job is listed once, in order)",
+            job.index
+        )));
+    }
     let mut entries = Vec::with_capacity(plan.jobs.len());
     for job in &plan.jobs {
-        entries.push(entry(out, job));
+        entries.push(entry(out, job, verify));
     }
     let jsonl = out.join("manifest.jsonl");
     let mut lines = String::new();
@@ -83,9 +136,12 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
         lines.push_str(&line);
         lines.push('\n');
     }
-    write_atomic(&jsonl, &lines)?;
+    // The sweep file and its scene are inputs of the sweep even when this command does not
+    // read them: the manifests never replace them.
+    let also = [plan.sweep.as_path(), plan.scene.as_path()];
+    crate::output::write(&jsonl, lines.as_bytes(), &also)?;
     let csv = out.join("manifest.csv");
-    write_atomic(&csv, &to_csv(&entries))?;
+    crate::output::write(&csv, to_csv(&entries).as_bytes(), &also)?;
     Ok(Manifest {
         entries,
         jsonl,
@@ -93,7 +149,7 @@ pub fn collect(out: &Path) -> Result<Manifest, SweepError> {
     })
 }
 
-fn entry(out: &Path, job: &Job) -> JobRecord {
+fn entry(out: &Path, job: &Job, verify: bool) -> JobRecord {
     let files = JobFiles::new(out, job.index);
     let blank = |status, error: Option<String>| JobRecord {
         index: job.index,
@@ -105,30 +161,39 @@ fn entry(out: &Path, job: &Job) -> JobRecord {
         summary: None,
         error,
     };
-    match files.read_record() {
-        Some(mut r) if r.status == Status::Ok => {
-            let size = std::fs::metadata(&files.bag).ok().map(|m| m.len());
-            if size != r.size {
-                r.status = Status::Failed;
-                r.error = Some(match size {
-                    None => format!("its bag {} is missing", files.bag_rel),
-                    Some(s) => format!(
-                        "its bag {} has {s} bytes, the record says {:?}",
-                        files.bag_rel, r.size
-                    ),
-                });
+    match files.load_record() {
+        Ok(Some(mut r)) if r.status == Status::Ok => {
+            if let Some(why) = files.fault(&r, job.index, verify) {
+                // The entry is the plan's job, whatever the record claims.
+                r = JobRecord {
+                    summary: r.summary,
+                    ..blank(Status::Failed, Some(why))
+                };
             }
             r
         }
-        Some(r) => r,
-        None if files.part.exists() => blank(
+        Ok(Some(r)) if r.index != job.index => blank(
+            Status::Failed,
+            Some(format!(
+                "its record claims job {} (the record of job {} must say {})",
+                r.index, job.index, job.index
+            )),
+        ),
+        Ok(Some(mut r)) => {
+            if r.error.as_deref().is_none_or(str::is_empty) {
+                r.error = Some("failed (the record gives no reason)".into());
+            }
+            r
+        }
+        Err(why) => blank(Status::Failed, Some(format!("unreadable record: {why}"))),
+        Ok(None) if files.part.exists() => blank(
             Status::Failed,
             Some(format!(
                 "no result record; a partial bag {}.part is left (killed mid-run, or still running)",
                 files.bag_rel
             )),
         ),
-        None => blank(Status::Missing, None),
+        Ok(None) => blank(Status::Missing, None),
     }
 }
 

@@ -1,9 +1,87 @@
 //! `drape sweep emit slurm|k8s`: the files that run a sweep on the scheduler a cluster already
 //! has. Each array task (Slurm) or indexed pod (Kubernetes) runs `drape sweep run FILE --index I`
 //! for its own index; see [`super::job`] for why reruns and requeues are safe.
+//!
+//! Text that reaches these files is checked for where it goes ([`EmitError`] names the option):
+//! the sweep's `name` is letters, digits, spaces, `-`, `_` and `.` (checked when the sweep is
+//! read);
+//! paths and values on `#SBATCH` lines (which `sbatch` reads without shell quoting) are limited
+//! to characters that need no quoting there (no whitespace, quotes, `%` patterns or control
+//! characters); the paths on the command line are single-quoted; and no value may hold a
+//! control character (a newline would end a comment or a `#SBATCH` line). The Kubernetes Job
+//! is serialised by serde, which quotes every string, so it is always one YAML document.
 
 use super::plan::Sweep;
 use std::path::{Path, PathBuf};
+
+/// A value that cannot be written into a scheduler file.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{key}: {value:?} {why}")]
+pub struct EmitError {
+    /// The option or key the value came from (`--out`, `--partition`, `--sbatch`).
+    pub key: String,
+    pub value: String,
+    pub why: &'static str,
+}
+
+fn no_control(key: &str, value: &str) -> Result<(), EmitError> {
+    if value.chars().any(char::is_control) {
+        return Err(EmitError {
+            key: key.to_string(),
+            value: value.to_string(),
+            why: "holds a control character (newline, tab, ...)",
+        });
+    }
+    Ok(())
+}
+
+/// A value for a `#SBATCH` line: no control characters, whitespace, quotes, `%` (a Slurm
+/// file-name pattern), `#`, `$`, backticks, backslashes or shell operators.
+fn sbatch_safe(key: &str, value: &str) -> Result<(), EmitError> {
+    no_control(key, value)?;
+    let bad = |c: char| {
+        c.is_whitespace()
+            || matches!(
+                c,
+                '\'' | '"'
+                    | '`'
+                    | '$'
+                    | '\\'
+                    | '%'
+                    | '#'
+                    | ';'
+                    | '&'
+                    | '|'
+                    | '<'
+                    | '>'
+                    | '('
+                    | ')'
+                    | '*'
+                    | '?'
+                    | '['
+                    | ']'
+                    | '{'
+                    | '}'
+                    | '!'
+            )
+    };
+    if value.chars().any(bad) {
+        return Err(EmitError {
+            key: key.to_string(),
+            value: value.to_string(),
+            why: "holds a character an #SBATCH line cannot carry (whitespace, quotes, %, #, $, or a shell operator)",
+        });
+    }
+    Ok(())
+}
+
+fn path_str<'a>(key: &str, p: &'a Path) -> Result<&'a str, EmitError> {
+    p.to_str().ok_or_else(|| EmitError {
+        key: key.to_string(),
+        value: p.display().to_string(),
+        why: "is not UTF-8",
+    })
+}
 
 /// Settings of the `sbatch` array script.
 #[derive(Debug, Clone)]
@@ -30,8 +108,27 @@ fn quote(s: &str) -> String {
 /// `--requeue` (a task whose node fails or is preempted runs again and redoes only its own job),
 /// and a log per task in `<out>/logs/slurm-<array job>_<task>.out` (the folder must exist before
 /// `sbatch`; [`super::write_plan`] and `drape sweep emit slurm` create it).
-pub fn slurm_script(sweep: &Sweep, sweep_path: &Path, o: &SlurmOptions) -> String {
+pub fn slurm_script(
+    sweep: &Sweep,
+    sweep_path: &Path,
+    o: &SlurmOptions,
+) -> Result<String, EmitError> {
     let n = sweep.job_count();
+    no_control("name", &sweep.name)?;
+    // `--out`, or the sweep's `out` made absolute.
+    let out = path_str("out", &o.out)?;
+    sbatch_safe("out", out)?;
+    no_control("--drape", path_str("--drape", &o.drape)?)?;
+    no_control("the sweep file's path", path_str("sweep file", sweep_path)?)?;
+    if let Some(t) = &o.time {
+        sbatch_safe("--time", t)?;
+    }
+    if let Some(p) = &o.partition {
+        sbatch_safe("--partition", p)?;
+    }
+    for e in &o.extra {
+        sbatch_safe("--sbatch", e)?;
+    }
     let name: String = sweep
         .name
         .chars()
@@ -86,7 +183,7 @@ pub fn slurm_script(sweep: &Sweep, sweep_path: &Path, o: &SlurmOptions) -> Strin
         quote(&sweep_path.display().to_string()),
         quote(&o.out.display().to_string()),
     ));
-    s
+    Ok(s)
 }
 
 /// Settings of the Kubernetes Indexed Job.
@@ -127,8 +224,23 @@ fn dns_name(s: &str) -> String {
 
 /// A `batch/v1` Job with `completionMode: Indexed`: one completion per sweep job; each pod runs
 /// `drape sweep run --index $(JOB_COMPLETION_INDEX)` (the index the Job controller gives it).
-pub fn k8s_job(sweep: &Sweep, sweep_file_name: &str, o: &K8sOptions) -> String {
+pub fn k8s_job(sweep: &Sweep, sweep_file_name: &str, o: &K8sOptions) -> Result<String, EmitError> {
     let n = sweep.job_count();
+    no_control("name", &sweep.name)?;
+    no_control("the sweep file's name", sweep_file_name)?;
+    for (key, v) in [
+        ("--image", Some(&o.image)),
+        ("--pvc", Some(&o.pvc)),
+        ("--mount", Some(&o.mount)),
+        ("--sweep-path", o.sweep_path.as_ref()),
+        ("--out", o.out.as_ref()),
+        ("--cpu", Some(&o.cpu)),
+        ("--memory", Some(&o.memory)),
+    ] {
+        if let Some(v) = v {
+            no_control(key, v)?;
+        }
+    }
     let mount = o.mount.trim_end_matches('/');
     let sweep_path = o
         .sweep_path
@@ -180,5 +292,10 @@ pub fn k8s_job(sweep: &Sweep, sweep_file_name: &str, o: &K8sOptions) -> String {
          # kubectl apply -f THIS_FILE; afterwards, on the volume: drape sweep collect {out}\n",
         sweep.name
     );
-    header + &serde_yaml_ng::to_string(&job).unwrap_or_default()
+    let body = serde_yaml_ng::to_string(&job).map_err(|_| EmitError {
+        key: "the Job".into(),
+        value: String::new(),
+        why: "cannot be written as YAML",
+    })?;
+    Ok(header + &body)
 }

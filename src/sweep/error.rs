@@ -19,6 +19,12 @@ pub enum SweepError {
         #[source]
         source: std::io::Error,
     },
+    /// The sweep file (or another file a sweep reads) is not a regular file of bounded size.
+    #[error(transparent)]
+    Input(Box<crate::input::InputError>),
+    /// An output would overwrite an input, or could not be written whole.
+    #[error(transparent)]
+    Output(Box<crate::output::OutputError>),
     /// The sweep file or the base scene is not YAML of the expected form.
     #[error("{origin}: not a valid sweep file or scene")]
     Yaml {
@@ -39,7 +45,7 @@ pub enum SweepError {
         origin: String,
         path: PathBuf,
         #[source]
-        source: std::io::Error,
+        source: Box<crate::input::InputError>,
     },
     /// A key of the sweep file is wrong (unknown path, wrong type, empty range, ...).
     #[error("{origin}: {key}")]
@@ -79,8 +85,15 @@ pub enum SweepError {
     },
     #[error("job index {index} is out of range: the sweep has {count} jobs (0 to {})", count.saturating_sub(1))]
     IndexOutOfRange { index: usize, count: usize },
-    #[error("{origin}: too many jobs (the grid overflows)")]
-    TooManyJobs { origin: String },
+    /// `plan.json` would pass the sweep plan's size cap.
+    #[error("{}: the plan is larger than the {cap} bytes allowed (the jobs' values are too large)", path.display())]
+    PlanTooLarge { path: PathBuf, cap: u64 },
+    /// Another process runs this job now (it holds the job's lock).
+    #[error("job {index} is already running (another process holds {}); a job runs once at a time", lock.display())]
+    Busy { index: usize, lock: PathBuf },
+    /// `plan.json` does not list each job once, in order, as many as it says.
+    #[error("{}: {why}", path.display())]
+    BadPlan { path: PathBuf, why: String },
     #[error("cannot encode {what}")]
     Encode {
         what: String,
@@ -93,6 +106,18 @@ pub enum SweepError {
         #[source]
         source: std::io::Error,
     },
+}
+
+impl From<crate::input::InputError> for SweepError {
+    fn from(e: crate::input::InputError) -> Self {
+        SweepError::Input(Box::new(e))
+    }
+}
+
+impl From<crate::output::OutputError> for SweepError {
+    fn from(e: crate::output::OutputError) -> Self {
+        SweepError::Output(Box::new(e))
+    }
 }
 
 /// Why a job's scene document is not a scene.
@@ -110,6 +135,16 @@ pub enum JobSceneError {
 pub enum KeyError {
     #[error("must be at least 1")]
     ZeroSamples,
+    /// `samples` times the grid's lists makes more jobs than a sweep may have.
+    #[error("{count} jobs: a sweep has at most {max} (split it into several sweep files)")]
+    TooManyJobs { count: String, max: usize },
+    /// The jobs' scene documents, which are all checked before any job runs, are too large.
+    #[error("{count} jobs of {bytes}-byte scene documents: more than the {max} bytes a sweep checks (fewer jobs, or a smaller scene)")]
+    TooMuchWork { count: usize, bytes: u64, max: u64 },
+    /// `name` with a character outside letters, digits, spaces, `-`, `_` and `.` (or longer
+    /// than `max`).
+    #[error("must be 1 to {max} letters, digits, spaces, `-`, `_` or `.`{}", found.as_ref().map(|c| format!(" (found {c})")).unwrap_or_default())]
+    BadName { found: Option<String>, max: usize },
     /// A key of `set`, `grid` or `random` that is not a string (`got`: the key as JSON).
     #[error("keys must be key paths (strings), got {got}")]
     NotAKeyPath { got: String },

@@ -55,9 +55,12 @@ pub struct JobRecord {
 /// Where job `index`'s files are.
 #[derive(Debug, Clone)]
 pub struct JobFiles {
+    pub index: usize,
     pub bag: PathBuf,
     pub part: PathBuf,
     pub record: PathBuf,
+    /// `jobs/I.lock`: held while the job runs.
+    pub lock: PathBuf,
     /// `jobs/I.mcap`, relative to the output folder.
     pub bag_rel: String,
 }
@@ -67,24 +70,120 @@ impl JobFiles {
         let stem = format!("{index:06}");
         let jobs = out.join("jobs");
         JobFiles {
+            index,
             bag: jobs.join(format!("{stem}.mcap")),
             part: jobs.join(format!("{stem}.mcap.part")),
             record: jobs.join(format!("{stem}.json")),
+            lock: jobs.join(format!("{stem}.lock")),
             bag_rel: format!("jobs/{stem}.mcap"),
         }
     }
 
-    /// The job's record, if it has a readable one.
-    pub fn read_record(&self) -> Option<JobRecord> {
-        let text = std::fs::read_to_string(&self.record).ok()?;
-        serde_json::from_str(&text).ok()
+    /// The job's record: `Ok(None)` when there is none, `Err(reason)` when one is there but
+    /// cannot be used (not a regular file, too large, not a record).
+    pub fn load_record(&self) -> Result<Option<JobRecord>, String> {
+        if std::fs::symlink_metadata(&self.record).is_err() {
+            return Ok(None);
+        }
+        let text = crate::input::read_text(&self.record, crate::input::InputKind::JobRecord)
+            .map_err(|e| crate::input::error_line(&e))?;
+        serde_json::from_str(&text)
+            .map(Some)
+            .map_err(|e| format!("{}: not a job record: {e}", self.record.display()))
     }
 
-    /// Done: an `ok` record whose bag is present with the recorded size.
-    pub fn done(&self) -> Option<JobRecord> {
+    /// The job's record, if it has a readable one.
+    pub fn read_record(&self) -> Option<JobRecord> {
+        self.load_record().ok().flatten()
+    }
+
+    /// Why an `ok` record of job `index` does not stand for its bag (checked against this
+    /// job's own files: index, bag path, size, and with `verify` the SHA-256), or `None`.
+    pub fn fault(&self, r: &JobRecord, index: usize, verify: bool) -> Option<String> {
+        if r.index != index {
+            return Some(format!(
+                "its record claims job {} (the record of job {index} must say {index})",
+                r.index
+            ));
+        }
+        if r.bag.as_deref() != Some(self.bag_rel.as_str()) {
+            return Some(format!(
+                "its record names the bag {:?}; job {index}'s bag is {}",
+                r.bag.as_deref().unwrap_or(""),
+                self.bag_rel
+            ));
+        }
+        let size = match std::fs::symlink_metadata(&self.bag) {
+            Ok(m) if m.is_file() => m.len(),
+            Ok(_) => return Some(format!("its bag {} is not a regular file", self.bag_rel)),
+            Err(_) => return Some(format!("its bag {} is missing", self.bag_rel)),
+        };
+        if Some(size) != r.size {
+            return Some(format!(
+                "its bag {} has {size} bytes, the record says {:?}",
+                self.bag_rel, r.size
+            ));
+        }
+        if verify {
+            match sha256_file(&self.bag) {
+                Ok(sha) if Some(&sha) == r.sha256.as_ref() => {}
+                Ok(sha) => {
+                    return Some(format!(
+                        "its bag {} has SHA-256 {sha}, the record says {}",
+                        self.bag_rel,
+                        r.sha256.as_deref().unwrap_or("none")
+                    ))
+                }
+                Err(e) => return Some(format!("its bag {} cannot be read: {e}", self.bag_rel)),
+            }
+        }
+        None
+    }
+
+    /// Done: an `ok` record of this job whose bag is present with the recorded size (and,
+    /// with `verify`, the recorded SHA-256).
+    pub fn done_checked(&self, index: usize, verify: bool) -> Option<JobRecord> {
         let r = self.read_record()?;
-        let size = std::fs::metadata(&self.bag).ok()?.len();
-        (r.status == Status::Ok && r.size == Some(size)).then_some(r)
+        (r.status == Status::Ok && self.fault(&r, index, verify).is_none()).then_some(r)
+    }
+
+    /// Done, by size (what a local run checks for every job before starting any).
+    pub fn done(&self) -> Option<JobRecord> {
+        self.done_checked(self.index, false)
+    }
+
+    /// Takes job `index`'s lock (`jobs/I.lock`, an advisory `flock` released when the returned
+    /// file is dropped or the process ends), so the same job never runs twice at once (a
+    /// requeued array task whose first attempt still runs).
+    pub fn lock(&self, index: usize) -> Result<std::fs::File, SweepError> {
+        use std::os::unix::fs::OpenOptionsExt;
+        use std::os::unix::io::AsRawFd;
+        let io = |source| SweepError::Io {
+            path: self.lock.clone(),
+            source,
+        };
+        let f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW)
+            .open(&self.lock)
+            .map_err(io)?;
+        if !f.metadata().map_err(io)?.is_file() {
+            return Err(io(std::io::Error::other("not a regular file")));
+        }
+        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let e = std::io::Error::last_os_error();
+            if e.kind() == std::io::ErrorKind::WouldBlock {
+                return Err(SweepError::Busy {
+                    index,
+                    lock: self.lock.clone(),
+                });
+            }
+            return Err(io(e));
+        }
+        Ok(f)
     }
 }
 
@@ -124,21 +223,22 @@ pub fn params_json(job: &Job) -> serde_json::Map<String, serde_json::Value> {
         .collect()
 }
 
-/// Writes `text` to `path` through a temporary file and a rename, so readers see the old file
-/// or the whole new one.
+/// Writes `text` to `path` through [`crate::output`]: never onto an input, through a temporary
+/// file and a rename, so readers see the old file or the whole new one.
 pub fn write_atomic(path: &Path, text: &str) -> Result<(), SweepError> {
-    let io = |source| SweepError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, text).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    Ok(crate::output::write(path, text.as_bytes(), &[])?)
 }
 
-/// SHA-256 of a file, lowercase hex.
+/// SHA-256 of a regular file (a FIFO or device is refused without blocking), lowercase hex.
 pub fn sha256_file(path: &Path) -> std::io::Result<String> {
-    let mut f = std::fs::File::open(path)?;
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(std::io::Error::other("not a regular file"));
+    }
     let mut h = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     loop {
@@ -164,17 +264,21 @@ pub fn run_job(
 ) -> Result<JobOutcome, SweepError> {
     let job = sweep.job(index)?;
     let files = JobFiles::new(out, index);
-    if !opts.force {
-        if let Some(r) = files.done() {
-            return Ok(JobOutcome::Skipped(r));
-        }
-    }
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| SweepError::Io { path, source }
     };
     let jobs_dir = out.join("jobs");
     std::fs::create_dir_all(&jobs_dir).map_err(io(&jobs_dir))?;
+    // Held until this function returns: another attempt at the same job fails here instead
+    // of writing the same bag and record at the same time.
+    let _lock = files.lock(index)?;
+    // A rerun redoes a job whose bag no longer matches its record's SHA-256.
+    if !opts.force {
+        if let Some(r) = files.done_checked(index, true) {
+            return Ok(JobOutcome::Skipped(r));
+        }
+    }
     // A stale record or partial bag from an earlier, killed attempt goes first.
     for stale in [&files.record, &files.part, &files.bag] {
         if stale.exists() {

@@ -13,14 +13,16 @@
 pub mod collect;
 pub mod draw;
 pub mod emit;
+pub use emit::EmitError;
 mod error;
 pub mod job;
 pub mod keypath;
+mod limits;
 pub mod plan;
 pub mod pool;
 mod rng;
 
-pub use collect::{collect, write_plan, Manifest, PlanFile};
+pub use collect::{collect, collect_with, write_plan, Manifest, PlanFile};
 pub use draw::{Draw, DrawError, RangeError, Target, TargetError};
 pub use error::{ApplyError, JobSceneError, KeyError, SweepError};
 pub use job::{run_job, JobFiles, JobOptions, JobOutcome, JobRecord, Status};

@@ -31,6 +31,8 @@
 use super::draw::{check_draw, sample, Draw, Target};
 use super::error::{ApplyError, JobSceneError, KeyError, SweepError};
 use super::keypath::{describe, KeyPath};
+use super::limits::{check_name, job_count, name_char};
+pub use super::limits::{MAX_JOBS, MAX_JOB_DOCUMENTS, MAX_NAME};
 use super::rng::SplitMix64;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -121,25 +123,24 @@ impl Sweep {
     /// every job (the scene's strict parse and validation), so that a bad sweep fails here,
     /// before any job runs.
     pub fn load(path: &Path) -> Result<Sweep, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::Sweep)?;
         let sweep = Self::from_yaml(&text, path)?;
-        for i in 0..sweep.count {
-            sweep.job_spec(&sweep.job(i)?)?;
+        // Jobs are checked on every core; the error reported is the lowest job's.
+        use rayon::prelude::*;
+        let first = (0..sweep.count)
+            .into_par_iter()
+            .find_map_first(|i| sweep.job(i).and_then(|j| sweep.job_spec(&j)).err());
+        match first {
+            Some(e) => Err(e),
+            None => Ok(sweep),
         }
-        Ok(sweep)
     }
 
     /// Reads a sweep file and checks each key, but not every job's scene: what one array task
     /// needs before running its own job (the whole plan was checked by `plan`, `emit` or
     /// `run --local`).
     pub fn open(path: &Path) -> Result<Sweep, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::read_text(path, crate::input::InputKind::Sweep)?;
         Self::from_yaml(&text, path)
     }
 
@@ -161,11 +162,11 @@ impl Sweep {
         }
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let scene_path = dir.join(&file.scene);
-        let scene_text =
-            std::fs::read_to_string(&scene_path).map_err(|source| SweepError::SceneFile {
+        let scene_text = crate::input::read_text(&scene_path, crate::input::InputKind::Scene)
+            .map_err(|source| SweepError::SceneFile {
                 origin: origin.clone(),
                 path: scene_path.clone(),
-                source,
+                source: Box::new(source),
             })?;
         let mut base: Value =
             serde_yaml_ng::from_str(&scene_text).map_err(|source| SweepError::Yaml {
@@ -221,14 +222,7 @@ impl Sweep {
             draws.push((key, target, draw));
         }
 
-        let mut count = file.samples;
-        for (_, _, values) in &axes {
-            count = count
-                .checked_mul(values.len())
-                .ok_or_else(|| SweepError::TooManyJobs {
-                    origin: origin.clone(),
-                })?;
-        }
+        let count = job_count(file.samples, &axes, &base).map_err(|e| key_err(e.0, e.1))?;
         let out_dir = match &file.out {
             Some(o) => dir.join(o),
             None => dir.join(format!(
@@ -237,11 +231,16 @@ impl Sweep {
             )),
         };
         let name = if file.name.is_empty() {
+            // The file's stem, with anything a name may not hold replaced.
             path.file_stem()
                 .and_then(|s| s.to_str())
                 .unwrap_or("sweep")
-                .to_string()
+                .chars()
+                .take(MAX_NAME)
+                .map(|c| if name_char(c) { c } else { '_' })
+                .collect()
         } else {
+            check_name(&file.name).map_err(|e| key_err("name", e))?;
             file.name.clone()
         };
         let sweep = Sweep {

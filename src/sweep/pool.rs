@@ -2,7 +2,8 @@
 //!
 //! Each job runs as its own process (`drape sweep run FILE --index I`, the same command an array
 //! task runs), so a job killed or crashing loses only itself, and its record and bag follow the
-//! rules of [`super::job`]. Jobs already done are skipped without starting a process. Children
+//! rules of [`super::job`]. Jobs already done (their bag still has the size and SHA-256 their
+//! record gives) are skipped without starting a process. Children
 //! get `RAYON_NUM_THREADS` = cores / N (at least 1) unless it is set: results do not depend on
 //! it, only the run time does.
 
@@ -63,7 +64,8 @@ pub fn run_local(
     })?;
     let mut todo: Vec<usize> = Vec::new();
     for i in 0..total {
-        if JobFiles::new(out, i).done().is_some() {
+        // A bag changed in place since its record was written is redone, not skipped.
+        if JobFiles::new(out, i).done_checked(i, true).is_some() {
             report.skipped += 1;
         } else {
             todo.push(i);
@@ -88,7 +90,20 @@ pub fn run_local(
         while !stopping && running.len() < opts.jobs.max(1) {
             let Some(i) = next.next() else { break };
             let log = logs.join(format!("{i:06}.log"));
-            let file = std::fs::File::create(&log).map_err(|source| SweepError::Io {
+            // The child writes its log as it runs (no staging file), so the rules of
+            // `crate::output` that apply are checked here: never an input, and a symlink
+            // planted under the log's name is not followed.
+            crate::output::check(&log, &[])?;
+            let file = {
+                use std::os::unix::fs::OpenOptionsExt;
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
+                    .open(&log)
+            }
+            .map_err(|source| SweepError::Io {
                 path: log.clone(),
                 source,
             })?;

@@ -41,7 +41,12 @@ pub(crate) enum SweepCommand {
         quiet: bool,
     },
     /// Merge the job records of an output folder into manifest.jsonl and manifest.csv.
-    Collect { dir: PathBuf },
+    Collect {
+        dir: PathBuf,
+        /// Also hash every finished bag and compare it with its record's SHA-256.
+        #[arg(long)]
+        verify: bool,
+    },
     /// Write the files that run a sweep on a cluster scheduler.
     Emit {
         #[command(subcommand)]
@@ -231,8 +236,8 @@ pub(crate) fn sweep(command: SweepCommand) -> Result<()> {
                 }
             }
         }
-        SweepCommand::Collect { dir } => {
-            let m = sweep::collect(&dir)?;
+        SweepCommand::Collect { dir, verify } => {
+            let m = sweep::collect_with(&dir, verify)?;
             println!(
                 "{}: {} jobs, {} ok, {} failed, {} missing; wrote {} and {}",
                 dir.display(),
@@ -269,8 +274,7 @@ fn emit(target: EmitTarget) -> Result<()> {
     let write = |path: Option<PathBuf>, text: String| -> Result<()> {
         match path {
             Some(p) => {
-                std::fs::write(&p, text)
-                    .with_context(|| format!("cannot write {}", p.display()))?;
+                drape::output::write(&p, text.as_bytes(), &[])?;
                 println!("wrote {}", p.display());
             }
             None => print!("{text}"),
@@ -290,26 +294,32 @@ fn emit(target: EmitTarget) -> Result<()> {
             sbatch,
         } => {
             let s = Sweep::load(&file)?;
+            // The script is checked as an output before the plan is written beside the jobs.
+            if let Some(p) = &script {
+                drape::output::check(p, &[])?;
+            }
             let abs = |p: &std::path::Path| -> Result<PathBuf> {
                 std::path::absolute(p).with_context(|| format!("cannot resolve {}", p.display()))
             };
             let out = abs(&out.unwrap_or_else(|| s.out_dir.clone()))?;
-            write_plan(&s, &out)?;
-            std::fs::create_dir_all(out.join("logs"))
-                .with_context(|| format!("cannot create {}/logs", out.display()))?;
             let opts = emit::SlurmOptions {
                 drape: match drape {
                     Some(d) => d,
                     None => std::env::current_exe().context("cannot find the drape executable")?,
                 },
-                out,
+                out: out.clone(),
                 cpus_per_task,
                 time,
                 partition,
                 max_parallel,
                 extra: sbatch,
             };
-            write(script, emit::slurm_script(&s, &abs(&file)?, &opts))?;
+            // Every value is checked for the script before anything is written.
+            let text = emit::slurm_script(&s, &abs(&file)?, &opts)?;
+            write_plan(&s, &out)?;
+            std::fs::create_dir_all(out.join("logs"))
+                .with_context(|| format!("cannot create {}/logs", out.display()))?;
+            write(script, text)?;
         }
         EmitTarget::K8s {
             file,
@@ -341,7 +351,7 @@ fn emit(target: EmitTarget) -> Result<()> {
                 cpu,
                 memory,
             };
-            write(manifest, emit::k8s_job(&s, &name, &opts))?;
+            write(manifest, emit::k8s_job(&s, &name, &opts)?)?;
         }
     }
     Ok(())

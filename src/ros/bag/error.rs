@@ -32,6 +32,13 @@ pub enum BagError {
         #[source]
         source: Option<mcap::McapError>,
     },
+    /// A chunk whose records do not fit in it (checked before the reader allocates them).
+    #[error("{path}: chunk {chunk} is damaged: {why}")]
+    ChunkRecord {
+        path: PathBuf,
+        chunk: usize,
+        why: String,
+    },
     #[error("{path} is not an MCAP file (bad magic bytes; rosbag2 .db3 files are not supported)")]
     NotMcap { path: PathBuf },
     #[error("{path}: MCAP error")]

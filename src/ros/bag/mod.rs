@@ -2,9 +2,10 @@
 //! reading typed messages back (e.g. `/joint_states` to drive a robot).
 
 mod error;
+pub mod lengths;
 mod read;
 mod write;
 
 pub use error::BagError;
-pub use read::{read_joint_states, read_topic, TopicRead};
+pub use read::{read_joint_states, read_topic, BagBytes, TopicIter, TopicRead};
 pub use write::{BagWriter, TopicId};

@@ -5,6 +5,7 @@ use super::BagError;
 use crate::ros::cdr;
 use crate::ros::msg::{Distro, RosMessage};
 use crate::ros::qos::{self, Durability, Reliability};
+use mcap::write::NoSeek;
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::BufWriter;
@@ -24,11 +25,14 @@ struct Topic {
 
 /// Writes a rosbag2 MCAP file that `ros2 bag play`, `rosbags` and Foxglove open.
 ///
+/// The file is written front to back without seeking (each chunk is compressed in memory,
+/// then written whole), so the target may also be a stream (`/dev/null`, a FIFO).
+///
 /// Call [`finish`](Self::finish) to see I/O errors; dropping an unfinished writer
 /// finishes the file too, logging (not returning) any error.
 pub struct BagWriter {
     path: PathBuf,
-    writer: Option<mcap::Writer<BufWriter<File>>>,
+    writer: Option<mcap::Writer<NoSeek<BufWriter<File>>>>,
     topics: Vec<Topic>,
     /// type name -> (schema id, definition text)
     schemas: HashMap<&'static str, (u16, String)>,
@@ -46,12 +50,15 @@ impl BagWriter {
         let options = mcap::WriteOptions::new()
             .profile("ros2")
             .library(concat!("drape ", env!("CARGO_PKG_VERSION")))
-            .compression(Some(mcap::Compression::Zstd));
+            .compression(Some(mcap::Compression::Zstd))
+            .disable_seeking(true);
         let mcap_err = |source| BagError::Mcap {
             path: path.clone(),
             source,
         };
-        let mut writer = options.create(BufWriter::new(file)).map_err(mcap_err)?;
+        let mut writer = options
+            .create(NoSeek::new(BufWriter::new(file)))
+            .map_err(mcap_err)?;
         // An empty serialized_metadata makes Jazzy's reader parse the QoS profiles in
         // the integer (version 8) form that Humble also reads; see `qos`.
         let metadata = mcap::records::Metadata {
@@ -221,10 +228,15 @@ impl BagWriter {
         let file = writer
             .into_inner()
             .into_inner()
+            .into_inner()
             .map_err(|e| BagError::Finish {
                 path: path.clone(),
                 source: e.into_error(),
             })?;
+        // A stream (a device or FIFO) has nothing to sync.
+        if !file.metadata().is_ok_and(|m| m.is_file()) {
+            return Ok(());
+        }
         file.sync_all()
             .map_err(|source| BagError::Finish { path, source })
     }
