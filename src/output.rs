@@ -62,12 +62,15 @@ pub enum Target {
     Stream,
 }
 
-/// Checks `path` as an output before any work: not one of the inputs read so far, not one of
+/// Checks `path` as an output before any work: not one of the inputs read so far (but a stale
+/// cache drape wrote, which it replaces), not one of
 /// `also` (inputs the caller has not read yet, e.g. the bags a render is about to read), not a
 /// directory. Returns where to write.
 pub fn check(path: &Path, also: &[&Path]) -> Result<Target, OutputError> {
     use std::os::unix::fs::MetadataExt;
-    if let Some(input) = crate::input::is_an_input(path) {
+    // A stale cache drape wrote itself (the study's reference) is replaced: that is its use.
+    let replaceable = |i: &crate::input::OpenedInput| i.kind == crate::input::InputKind::StudyCache;
+    if let Some(input) = crate::input::is_an_input(path).filter(|i| !replaceable(i)) {
         return Err(OutputError::OntoInput {
             path: path.to_path_buf(),
             input: input.path,
