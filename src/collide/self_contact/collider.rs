@@ -82,13 +82,10 @@ impl SelfCollider {
     }
 
     pub fn new(triangles: &[[u32; 3]], n_vertices: usize) -> Self {
-        let mut edges: Vec<[u32; 2]> = triangles
-            .iter()
-            .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-            .map(|[a, b]| [a.min(b), a.max(b)])
+        let edges: Vec<[u32; 2]> = crate::cloth::topology::unique_edges(triangles)
+            .into_iter()
+            .map(|(a, b)| [a, b])
             .collect();
-        edges.sort_unstable();
-        edges.dedup();
         let (nbr_start, nbr) = one_ring(&edges, n_vertices);
         Self {
             triangles: triangles.to_vec(),

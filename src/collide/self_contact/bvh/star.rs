@@ -70,13 +70,10 @@ mod tests {
             tris.push([a, b, d]);
             tris.push([a, d, c]);
         }
-        let mut edges: Vec<[u32; 2]> = tris
-            .iter()
-            .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-            .map(|[a, b]| [a.min(b), a.max(b)])
+        let edges: Vec<[u32; 2]> = crate::cloth::topology::unique_edges(&tris)
+            .into_iter()
+            .map(|(a, b)| [a, b])
             .collect();
-        edges.sort_unstable();
-        edges.dedup();
         for t in &tris {
             let [a, b, c] = t.map(|i| x[i as usize]);
             assert!((b - a).cross(c - a).normalize().z > 0.99);

@@ -14,13 +14,10 @@ pub(super) fn grid(n: usize) -> (Vec<[u32; 3]>, Vec<[u32; 2]>, Vec<Vec3>) {
             tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
         }
     }
-    let mut edges: Vec<[u32; 2]> = tris
-        .iter()
-        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-        .map(|[a, b]| [a.min(b), a.max(b)])
+    let edges: Vec<[u32; 2]> = crate::cloth::topology::unique_edges(&tris)
+        .into_iter()
+        .map(|(a, b)| [a, b])
         .collect();
-    edges.sort_unstable();
-    edges.dedup();
     let h = 1.0 / (n - 1) as f64;
     let x = (0..n * n)
         .map(|k| Vec3::new((k / n) as f64 * h, (k % n) as f64 * h, 0.0))
