@@ -402,7 +402,7 @@ impl std::fmt::Display for Solver {
     }
 }
 
-/// Rows: DDS (the README table) and the same pipeline without DDS (channels straight to the
+/// Rows: DDS (the node as users run it) and the same pipeline without DDS (channels straight to the
 /// simulation thread), which separates the node's own latency from the middleware's.
 /// `DRAPE_LATENCY_ROWS=direct` runs only the latter (quick iterations on the pipeline), `self`
 /// only the self-collision row.

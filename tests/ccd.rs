@@ -153,7 +153,7 @@ fn thick_vertex_triangle_first_time_of_approach() {
     assert_eq!(h.bary, [0., 1., 0.]);
     // Gap sqrt(0.05^2 + z^2) = 0.1 first at z = sqrt(0.0075); the hit may stop early within
     // the acceptance band (gap at most 0.1 (1 + THICK_ACCEPT_REL)).
-    let t_star = (1.0 - 0.0075f64.sqrt()) / 2.0;
+    let t_star = (1.0 - 0.0075_f64.sqrt()) / 2.0;
     let gap = (0.05f64.powi(2) + (1.0 - 2.0 * h.t).powi(2)).sqrt();
     assert!(
         h.t <= t_star + 1e-12 && gap <= 0.1 * (1.0 + THICK_ACCEPT_REL) + 1e-12,

@@ -91,10 +91,10 @@ fn a_frictionless_strip_slides_off_the_table() {
 /// strip slides off: an ideal string would accelerate at about `g (0.33 - 0.11) / L = 2 m/s^2`
 /// and be off in ~1 s after the hanging part's fall. Measured 2.3 s: the strip slides at a near
 /// steady 0.3 m/s, the coarse strip (2.5 cm segments) flapping on the table next to the edge,
-/// where its landings take about half the work gravity does (README, known limits). It used to
-/// stick for good: the edge's push by position stretched the strip over the edge (4.7 N of
-/// tension against 0.09 N of hanging weight) and the filter glued the lifted vertex next to the
-/// edge to the table. The verdict is what this checks, with 3 s to reach it.
+/// where its landings take about half the work gravity does (docs/guide/collision.md, known
+/// limits). A push by position at the edge would stretch the strip over it (several newtons of
+/// tension against 0.09 N of hanging weight) and glue it to the table; the edge's contact is
+/// solved with the tension instead. The verdict is what this checks, with 3 s to reach it.
 #[test]
 fn a_strip_with_a_heavy_hanging_part_slides_off_the_table() {
     let (_, farthest) = strip(0.45, MU, 3.0);

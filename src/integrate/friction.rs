@@ -29,8 +29,7 @@
 //! only those slide that Coulomb would not stop against the last load, so a reversal needs the
 //! load to drop within the step). Refitting both ways, with modes from the start slip only,
 //! chatters on a cloth draped over a sphere: dozens of held vertices change mode after every
-//! solve, and each step is solved about three times (README, "The solve under contact": why
-//! the iterations rise).
+//! solve, and each step is solved about three times.
 
 use crate::linalg::outer;
 use crate::linalg::BlockCsr;
