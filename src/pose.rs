@@ -43,6 +43,20 @@ impl Pose {
         Self::new(Vec3::from(xyz), rot)
     }
 
+    /// The URDF roll, pitch and yaw of the rotation ([`Pose::from_xyz_rpy`]'s inverse), pitch in
+    /// [-π/2, π/2]; at a pitch of ±π/2 the roll is 0 and the yaw carries the rest.
+    pub fn rpy(&self) -> [f64; 3] {
+        let m = DMat3::from_quat(self.rotation);
+        let (c0, c1, c2) = (m.col(0), m.col(1), m.col(2));
+        // atan2 rather than asin: exact near a pitch of ±π/2, where asin loses half the digits.
+        let pitch = (-c0.z).atan2(c0.x.hypot(c0.y));
+        if c0.x.hypot(c0.y) > 1e-12 {
+            [c1.z.atan2(c2.z), pitch, c0.y.atan2(c0.x)]
+        } else {
+            [0.0, pitch, (-c1.x).atan2(c1.y)]
+        }
+    }
+
     pub fn transform_point(&self, p: Vec3) -> Vec3 {
         self.rotation * p + self.translation
     }
@@ -108,6 +122,28 @@ impl Pose {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rpy_inverts_from_xyz_rpy() {
+        for rpy in [
+            [0.4, -0.7, 1.9],
+            [-3.0, 1.2, -2.5],
+            [0.0, 0.0, 0.0],
+            [1.0, std::f64::consts::FRAC_PI_2, 0.3],
+        ] {
+            let p = Pose::from_xyz_rpy([0.0; 3], rpy);
+            let back = Pose::from_xyz_rpy([0.0; 3], p.rpy());
+            assert!(
+                p.rotation.angle_between(back.rotation) < 1e-9,
+                "{rpy:?} -> {:?}",
+                p.rpy()
+            );
+        }
+        let r = Pose::from_xyz_rpy([0.0; 3], [0.4, -0.7, 1.9]).rpy();
+        assert!(
+            (r[0] - 0.4).abs() < 1e-12 && (r[1] + 0.7).abs() < 1e-12 && (r[2] - 1.9).abs() < 1e-12
+        );
+    }
 
     #[test]
     fn lerp_ends_exactly_on_its_poses() {

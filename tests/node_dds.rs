@@ -12,7 +12,7 @@ use drape::ros::msg::{
     Clock, DiagnosticArray, Header, JointState, PointCloud2, RosString, Time, TriggerRequest,
     TriggerResponse,
 };
-use drape::ros::node::{context, run_node, DescriptionSource, Network, NodeParams};
+use drape::ros::node::{context, run_node, Network, NodeParams};
 use ros2_client::qos::{Durability, History};
 use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
 use ros2_client::{
@@ -122,7 +122,7 @@ fn node_in_process_sim_time_description_and_bad_inputs() {
 
     let params = NodeParams {
         scene: format!("{root}/config/robot_towel.yaml").into(),
-        robot_description: DescriptionSource::Topic,
+        robot_description_from_topic: true,
         use_sim_time: true,
         publish_rate: 20.0,
         diagnostics_rate: 2.0,

@@ -195,3 +195,166 @@ fn full_disk_is_a_clear_error() {
     let out = mnt.join("bag.mcap");
     check(&out, record(&out));
 }
+
+/// A tetrahedron, ASCII STL.
+const TETRA_STL: &str = "solid tetra\n\
+facet normal 0 0 -1\n outer loop\n  vertex 0 0 0\n  vertex 0 1 0\n  vertex 1 0 0\n endloop\nendfacet\n\
+facet normal 0 -1 0\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 0 0 1\n endloop\nendfacet\n\
+facet normal -1 0 0\n outer loop\n  vertex 0 0 0\n  vertex 0 0 1\n  vertex 0 1 0\n endloop\nendfacet\n\
+facet normal 1 1 1\n outer loop\n  vertex 1 0 0\n  vertex 0 1 0\n  vertex 0 0 1\n endloop\nendfacet\n\
+endsolid tetra\n";
+
+fn drape(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(args)
+        .env("RUST_LOG", "error")
+        .output()
+        .unwrap()
+}
+
+/// `record` and `check` take the scene as SCENE or `--scene SCENE`, and find a robot's
+/// `package://` mesh in a `--package-path` folder that is nowhere near the URDF.
+#[test]
+fn scene_either_way_and_package_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = dir.path().join("scenes");
+    let pkgs = dir.path().join("pkgs");
+    std::fs::create_dir_all(pkgs.join("tetra_pkg/meshes")).unwrap();
+    std::fs::create_dir_all(&scenes).unwrap();
+    std::fs::write(pkgs.join("tetra_pkg/meshes/tetra.stl"), TETRA_STL).unwrap();
+    std::fs::write(
+        scenes.join("bot.urdf"),
+        "<robot name=\"bot\"><link name=\"base\"><collision><geometry><mesh \
+         filename=\"package://tetra_pkg/meshes/tetra.stl\" scale=\"0.1 0.1 0.1\"/></geometry>\
+         </collision></link></robot>\n",
+    )
+    .unwrap();
+    let scene = scenes.join("scene.yaml");
+    let base = std::fs::read_to_string(short_scene(dir.path())).unwrap();
+    std::fs::write(&scene, format!("{base}robot:\n  urdf: bot.urdf\n")).unwrap();
+    let (s, p) = (scene.as_os_str(), pkgs.as_os_str());
+    let os = |a: &str| std::ffi::OsString::from(a);
+
+    // Without the package folder the mesh is not found, and the error says where it looked.
+    for cmd in [
+        ["check"].as_slice(),
+        ["record", "--out", "x.mcap"].as_slice(),
+    ] {
+        let mut args: Vec<std::ffi::OsString> = cmd.iter().map(|a| os(a)).collect();
+        args.push(s.into());
+        let args: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+        let o = drape(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{cmd:?}: found the mesh\n{err}");
+        assert!(
+            err.contains("package://tetra_pkg/meshes/tetra.stl"),
+            "{err}"
+        );
+    }
+    let check = drape(&[
+        os("check").as_os_str(),
+        s,
+        os("--package-path").as_os_str(),
+        p,
+    ]);
+    let out = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    assert!(out.contains("link base: mesh 4 triangles"), "{out}");
+
+    // The two spellings of the scene record the same bag, byte for byte.
+    let bags = [dir.path().join("a.mcap"), dir.path().join("b.mcap")];
+    let tail = |bag: &Path| {
+        vec![
+            os("--out"),
+            bag.as_os_str().into(),
+            os("--duration"),
+            os("0.1"),
+            os("--quiet"),
+            os("--package-path"),
+            p.into(),
+        ]
+    };
+    let mut positional = vec![os("record"), s.into()];
+    positional.extend(tail(&bags[0]));
+    let mut option = vec![os("record"), os("--scene"), s.into()];
+    option.extend(tail(&bags[1]));
+    for args in [positional, option] {
+        let args: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+        let o = drape(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let [a, b] = bags.map(|b| std::fs::read(b).unwrap());
+    assert!(!a.is_empty());
+    assert!(a == b, "the bags differ");
+
+    // Both at once is an error, not a silent choice.
+    let o = drape(&[os("check").as_os_str(), s, os("--scene").as_os_str(), s]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));
+}
+
+/// Every argument of every command has help text (`render` aside: its arguments are its own
+/// module's); the developer tools are under `drape dev` and hidden from the main help, and
+/// their old spellings still run.
+#[test]
+fn help_names_every_argument_and_groups_developer_tools() {
+    let help = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_drape"))
+            .args(args)
+            .arg("-h")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{args:?}");
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let main = help(&[]);
+    let commands: Vec<&str> = main
+        .lines()
+        .skip_while(|l| *l != "Commands:")
+        .skip(1)
+        .take_while(|l| !l.is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert_eq!(
+        commands,
+        ["record", "node", "check", "dev", "render", "sweep", "help"],
+        "{main}"
+    );
+    let mut paths: Vec<Vec<&str>> = vec![
+        vec!["record"],
+        vec!["node"],
+        vec!["check"],
+        vec!["dev", "study"],
+        vec!["dev", "hard-cases"],
+        vec!["study"],
+        vec!["hard-cases"],
+    ];
+    for s in ["plan", "run", "collect"] {
+        paths.push(vec!["sweep", s]);
+    }
+    paths.push(vec!["sweep", "emit", "slurm"]);
+    paths.push(vec!["sweep", "emit", "k8s"]);
+    for path in &paths {
+        let text = help(path);
+        let mut args = 0;
+        for line in text
+            .lines()
+            .skip_while(|l| *l != "Arguments:" && *l != "Options:")
+        {
+            let t = line.trim_start();
+            if !(t.starts_with('-') || t.starts_with('[') || t.starts_with('<')) {
+                continue;
+            }
+            args += 1;
+            // clap puts the help two spaces after the argument; without help there is none.
+            assert!(t.contains("  "), "{path:?}: `{t}` has no help text\n{text}");
+        }
+        assert!(args > 1, "{path:?}\n{text}");
+    }
+    assert!(help(&["study"]).contains("Usage: drape study [OPTIONS] --out <OUT>"));
+    assert!(help(&["hard-cases"]).contains("Usage: drape hard-cases [OPTIONS] --out <OUT>"));
+}

@@ -19,14 +19,38 @@ struct Cli {
     command: Command,
 }
 
+/// The scene file of `record` and `check`: `drape check SCENE`, or `--scene SCENE`.
+#[derive(clap::Args)]
+struct SceneArg {
+    /// Scene file (YAML).
+    #[arg(value_name = "SCENE", required_unless_present = "scene_option")]
+    scene: Option<PathBuf>,
+    /// The scene file, as an option instead of the positional SCENE.
+    #[arg(
+        long = "scene",
+        id = "scene_option",
+        value_name = "SCENE",
+        conflicts_with = "scene"
+    )]
+    scene_option: Option<PathBuf>,
+}
+
+impl SceneArg {
+    fn path(self) -> Result<PathBuf> {
+        // clap requires one of the two.
+        self.scene
+            .or(self.scene_option)
+            .ok_or_else(|| anyhow::anyhow!("no scene: pass SCENE or --scene SCENE"))
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene offline and record the cloth to a rosbag2 MCAP file.
     #[cfg(feature = "ros")]
     Record {
-        /// Scene file (YAML).
-        #[arg(long)]
-        scene: PathBuf,
+        #[command(flatten)]
+        scene: SceneArg,
         /// Output bag (.mcap).
         #[arg(long)]
         out: PathBuf,
@@ -50,45 +74,60 @@ enum Command {
         /// run to run).
         #[arg(long)]
         wall_time_in_bag: bool,
+        /// Folder searched for the robot's `package://` meshes, besides $ROS_PACKAGE_PATH and
+        /// $AMENT_PREFIX_PATH (repeatable).
+        #[arg(long, value_name = "DIR")]
+        package_path: Vec<PathBuf>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
     },
-    /// Measure what accuracy costs in time: sweep integrators, steps, CG settings and resolutions.
-    #[cfg(feature = "tools")]
-    Study {
-        /// Small sweep (under 2 minutes) instead of the full study.
-        #[arg(long)]
-        quick: bool,
-        /// Output folder (runs.csv, summary.md, plots, cached references).
-        #[arg(long)]
-        out: PathBuf,
-    },
     /// Run the live ROS 2 node: joint states in, cloth mesh and points out at a fixed rate.
     #[cfg(feature = "ros")]
     Node {
-        /// ROS 2 parameters file (`drape: ros__parameters: ...`).
-        #[arg(long)]
+        /// ROS 2 parameters file (`drape: ros__parameters: ...`); files after `--ros-args
+        /// --params-file` are read after it, and a later file's values win.
+        #[arg(long, value_name = "FILE")]
         params: Option<PathBuf>,
-        /// ROS arguments: `--ros-args --params-file F -r __ns:=/ns -r __node:=name -p k:=v`.
+        /// Folder searched for the robot's `package://` meshes, besides $ROS_PACKAGE_PATH,
+        /// $AMENT_PREFIX_PATH and the `package_paths` parameter (repeatable).
+        #[arg(long, value_name = "DIR")]
+        package_path: Vec<PathBuf>,
+        /// ROS arguments: `--ros-args --params-file F -r __ns:=/ns -r __node:=name -p k:=v`
+        /// (`-p scene:=SCENE` alone is enough to run).
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         ros_args: Vec<String>,
     },
-    /// Run the hard-case catalogue and write its Markdown summary of worst values.
-    #[cfg(feature = "tools")]
-    HardCases {
-        /// Full resolution and duration (minutes) instead of the CI variants (seconds).
-        #[arg(long)]
-        full: bool,
-        /// Output Markdown file, e.g. docs/hard_cases.md.
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Parse and validate a scene, and print what it builds.
+    /// Parse and validate a scene, print what it builds, and warn about likely mistakes.
+    ///
+    /// Warnings (the check still succeeds): an angle over 2*pi (degrees written where radians
+    /// belong), attached cloth more than 0.25 m from its link or frame, a `near` selection that
+    /// picks no vertex, a cloth with no obstacle or robot link within 1 m (or twice its size).
     Check {
+        #[command(flatten)]
+        scene: SceneArg,
+        /// Also print each robot link's world pose at t = 0 (xyz, rpy), to place cloth by.
         #[arg(long)]
-        scene: PathBuf,
+        links: bool,
+        /// Folder searched for the robot's `package://` meshes, besides $ROS_PACKAGE_PATH and
+        /// $AMENT_PREFIX_PATH (repeatable).
+        #[arg(long, value_name = "DIR")]
+        package_path: Vec<PathBuf>,
     },
+    /// Developer tools: the accuracy/cost study and the hard-case catalogue.
+    #[cfg(feature = "tools")]
+    Dev {
+        #[command(subcommand)]
+        command: DevCommand,
+    },
+    /// Measure what accuracy costs in time (`drape dev study`).
+    #[cfg(feature = "tools")]
+    #[command(hide = true)]
+    Study(StudyArgs),
+    /// Run the hard-case catalogue (`drape dev hard-cases`).
+    #[cfg(feature = "tools")]
+    #[command(hide = true)]
+    HardCases(HardCasesArgs),
     /// Draw recorded bags (cloth shaded, robot collision shapes) to a PNG sheet or a GIF.
     #[cfg(feature = "ros")]
     Render {
@@ -129,6 +168,38 @@ enum Command {
         #[command(subcommand)]
         command: SweepCommand,
     },
+}
+
+/// `drape dev`: tools for working on drape itself rather than with it.
+#[cfg(feature = "tools")]
+#[derive(Subcommand)]
+enum DevCommand {
+    /// Measure what accuracy costs in time: sweep integrators, steps, CG settings and resolutions.
+    Study(StudyArgs),
+    /// Run the hard-case catalogue and write its Markdown summary of worst values.
+    HardCases(HardCasesArgs),
+}
+
+#[cfg(feature = "tools")]
+#[derive(clap::Args)]
+struct StudyArgs {
+    /// Small sweep (under 2 minutes) instead of the full study.
+    #[arg(long)]
+    quick: bool,
+    /// Output folder (runs.csv, summary.md, plots, cached references).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[cfg(feature = "tools")]
+#[derive(clap::Args)]
+struct HardCasesArgs {
+    /// Full resolution and duration (minutes) instead of the CI variants (seconds).
+    #[arg(long)]
+    full: bool,
+    /// Output Markdown file, e.g. docs/hard_cases.md.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 fn main() {
@@ -192,9 +263,10 @@ fn run(cli: Cli) -> Result<()> {
             joints,
             summary,
             wall_time_in_bag,
+            package_path,
             quiet,
         } => record(RecordArgs {
-            scene_path: scene,
+            scene_path: scene.path()?,
             out,
             duration,
             distro,
@@ -202,14 +274,25 @@ fn run(cli: Cli) -> Result<()> {
             joints,
             summary,
             wall_time_in_bag,
+            package_paths: package_path,
             quiet,
         }),
         #[cfg(feature = "tools")]
-        Command::Study { quick, out } => study(quick, out),
-        #[cfg(feature = "ros")]
-        Command::Node { params, ros_args } => node(params, ros_args),
+        Command::Study(a)
+        | Command::Dev {
+            command: DevCommand::Study(a),
+        } => study(a.quick, a.out),
         #[cfg(feature = "tools")]
-        Command::HardCases { full, out } => hard_cases(full, out),
+        Command::HardCases(a)
+        | Command::Dev {
+            command: DevCommand::HardCases(a),
+        } => hard_cases(a.full, a.out),
+        #[cfg(feature = "ros")]
+        Command::Node {
+            params,
+            package_path,
+            ros_args,
+        } => node(params, package_path, ros_args),
         #[cfg(feature = "ros")]
         Command::Sweep { command } => sweep(command),
         #[cfg(feature = "ros")]
@@ -250,42 +333,81 @@ fn run(cli: Cli) -> Result<()> {
             println!("wrote {}", out.display());
             Ok(())
         }
-        Command::Check { scene } => {
-            #[cfg(feature = "ros")]
-            install_stop_handler(false)?;
-            let s = drape::scene::Scene::load(&scene)?;
-            let (sim, driver) = drape::scene::build_with_robot(&s)?;
-            println!(
-                "{}: {} vertices, {} triangles, effects {:?}, integrator {}, dt {} s x {} substeps",
-                scene.display(),
-                sim.cloth.len(),
-                sim.cloth.triangles.len(),
-                sim.effects().names(),
-                sim.integrator_name(),
-                sim.settings.dt,
-                sim.settings.substeps
-            );
-            if let Some(d) = &driver {
-                print!("{}", drape::robot::RobotSummary::of(d.robot()));
-            }
-            if let Some(stage) = sim.collision() {
-                let overlaps = stage.overlaps(&sim.cloth.x);
+        Command::Check {
+            scene,
+            links,
+            package_path,
+        } => check(&scene.path()?, links, package_path),
+    }
+}
+
+/// `drape check`: what the scene builds, the robot's summary (and link poses with `--links`),
+/// cloth starting inside obstacles, then the likely mistakes as warnings (not errors).
+fn check(path: &std::path::Path, links: bool, package_paths: Vec<PathBuf>) -> Result<()> {
+    #[cfg(feature = "ros")]
+    install_stop_handler(false)?;
+    let mut s = drape::scene::Scene::load(path)?;
+    s.package_paths = package_paths;
+    let (sim, driver) = drape::scene::build_with_robot(&s)?;
+    println!(
+        "{}: {} vertices, {} triangles, effects {:?}, integrator {}, dt {} s x {} substeps",
+        path.display(),
+        sim.cloth.len(),
+        sim.cloth.triangles.len(),
+        sim.effects().names(),
+        sim.integrator_name(),
+        sim.settings.dt,
+        sim.settings.substeps
+    );
+    if let Some(d) = &driver {
+        print!("{}", drape::robot::RobotSummary::of(d.robot()));
+    }
+    if links {
+        match &driver {
+            Some(d) => {
                 println!(
-                    "{} obstacles; {}",
-                    stage.obstacles().len(),
-                    if overlaps.is_empty() {
-                        "no cloth vertex starts inside one"
-                    } else {
-                        "cloth starting inside them:"
-                    }
+                    "link poses at t = 0 (world frame: the root link `{}`):",
+                    d.root_link()
                 );
-                for o in overlaps {
-                    println!("  {o}");
+                // Rounded first, so that -0.00001 prints as 0.0000, not -0.0000.
+                let f = |v: [f64; 3]| {
+                    let r = v.map(|x| (x * 1e4).round() / 1e4 + 0.0);
+                    format!("[{:.4}, {:.4}, {:.4}]", r[0], r[1], r[2])
+                };
+                for (name, pose) in d.robot().link_names().iter().zip(d.link_poses()) {
+                    println!(
+                        "  {name}: {{ xyz: {}, rpy: {} }}",
+                        f(pose.translation.to_array()),
+                        f(pose.rpy())
+                    );
                 }
             }
-            Ok(())
+            None => println!("no robot: the scene has no `robot:` section"),
         }
     }
+    if let Some(stage) = sim.collision() {
+        let overlaps = stage.overlaps(&sim.cloth.x);
+        println!(
+            "{} obstacles; {}",
+            stage.obstacles().len(),
+            if overlaps.is_empty() {
+                "no cloth vertex starts inside one"
+            } else {
+                "cloth starting inside them:"
+            }
+        );
+        for o in overlaps {
+            println!("  {o}");
+        }
+    }
+    let warnings = drape::scene::lint(&s, &sim, driver.as_ref());
+    for w in &warnings {
+        println!("warning: {}: {w}", path.display());
+    }
+    if warnings.is_empty() {
+        println!("no warnings");
+    }
+    Ok(())
 }
 
 /// Runs every hard case, writes the summary, and fails if any case failed its criteria.
@@ -361,6 +483,7 @@ struct RecordArgs {
     joints: Option<PathBuf>,
     summary: Option<PathBuf>,
     wall_time_in_bag: bool,
+    package_paths: Vec<PathBuf>,
     quiet: bool,
 }
 
@@ -378,13 +501,15 @@ fn record(args: RecordArgs) -> Result<()> {
         joints,
         summary: summary_file,
         wall_time_in_bag,
+        package_paths,
         quiet,
     } = args;
 
     // Ctrl-C and SIGTERM end every phase: at once while loading and building, by finishing
     // the bag while recording.
     install_stop_handler(false)?;
-    let scene = drape::scene::Scene::load(&scene_path)?;
+    let mut scene = drape::scene::Scene::load(&scene_path)?;
+    scene.package_paths = package_paths;
     // The summary goes through the same output rules as the bag; checked before the run so
     // that a summary naming an input (or the bag) fails before anything is simulated.
     if let Some(file) = &summary_file {
@@ -476,10 +601,11 @@ fn record(args: RecordArgs) -> Result<()> {
     Ok(())
 }
 
-/// `drape node`: parameters from `--params` and/or `--ros-args --params-file` (the last file
-/// wins), node name and namespace from `-r __node:=` / `-r __ns:=`, then `-p` overrides.
+/// `drape node`: parameters from `--params` then each `--ros-args --params-file` (a later
+/// file's values win), node name and namespace from `-r __node:=` / `-r __ns:=`, then `-p`
+/// overrides (enough on their own: `--ros-args -p scene:=SCENE`).
 #[cfg(feature = "ros")]
-fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
+fn node(params: Option<PathBuf>, package_paths: Vec<PathBuf>, ros_args: Vec<String>) -> Result<()> {
     use drape::ros::node::{parse_ros_args, run_node, NodeParams};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
@@ -494,18 +620,26 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         check_ros_name(n, false).map_err(|why| anyhow::anyhow!("-r __node:={n}: {why}"))?;
     }
     let name = ra.node_name.clone().unwrap_or_else(|| "drape".to_string());
-    let file = ra.params_files.last().cloned().or(params).ok_or_else(|| {
-        anyhow::anyhow!("no parameters: pass --params FILE or --ros-args --params-file FILE")
-    })?;
-    let mut p = NodeParams::load(&file, &name)?;
+    let files: Vec<PathBuf> = params.into_iter().chain(ra.params_files).collect();
+    if files.is_empty() && ra.overrides.is_empty() {
+        anyhow::bail!(
+            "no parameters: pass --params FILE, --ros-args --params-file FILE, or at least \
+             --ros-args -p scene:=SCENE"
+        );
+    }
+    let mut p = NodeParams::from_sources(&files, &ra.overrides, &name)?;
+    p.package_paths.extend(package_paths);
     if let Some(ns) = ra.namespace {
         p.namespace = ns;
     }
-    p.apply_overrides(&ra.overrides)?;
+    let origin = match files.last() {
+        Some(f) => f.display().to_string(),
+        None => "command line".to_string(),
+    };
     check_ros_name(&p.namespace, true)
-        .map_err(|why| anyhow::anyhow!("{}: namespace {:?}: {why}", file.display(), p.namespace))?;
+        .map_err(|why| anyhow::anyhow!("{origin}: namespace {:?}: {why}", p.namespace))?;
     check_ros_name(&p.name, false)
-        .map_err(|why| anyhow::anyhow!("{}: node name {:?}: {why}", file.display(), p.name))?;
+        .map_err(|why| anyhow::anyhow!("{origin}: node name {:?}: {why}", p.name))?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     // The stop flag ends the run loop; the cancellation flag ends a scene build in progress
@@ -515,7 +649,7 @@ fn node(params: Option<PathBuf>, ros_args: Vec<String>) -> Result<()> {
         flag.store(true, Ordering::Relaxed)
     })
     .context("cannot install the Ctrl-C handler")?;
-    let s = run_node(&p, stop).with_context(|| format!("node with {}", file.display()))?;
+    let s = run_node(&p, stop).with_context(|| format!("node with {origin}"))?;
     log::info!(
         "drape node stopped: {} frames published, {} joint states received",
         s.frames_published,

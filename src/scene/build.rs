@@ -169,6 +169,7 @@ fn load_robot(scene: &Scene, r: &RobotSpec) -> Result<RobotDriver, SceneError> {
     let options = UrdfOptions {
         visual_fallback: r.visual_fallback,
         mesh_roots: scene.mesh_roots(),
+        search_paths: scene.package_paths.clone(),
         ..UrdfOptions::default()
     };
     let origin = path.display().to_string();

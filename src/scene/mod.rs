@@ -12,6 +12,7 @@
 
 mod build;
 mod error;
+pub mod lint;
 mod problem;
 mod validate;
 
@@ -19,6 +20,7 @@ pub use error::{NameKind, SceneError};
 pub use problem::{Problem, MAX_VERTICES};
 
 pub use build::{build, build_with_robot};
+pub use lint::{lint, Warning, WarningKind};
 
 use crate::cloth::{GridRegion, Material};
 use crate::collide::{CollisionSpec, ObstacleSpec};
@@ -260,6 +262,11 @@ pub struct Scene {
     /// `file://`, relative, through symlinks) must resolve inside one of them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub mesh_paths: Vec<PathBuf>,
+    /// Folders searched for the URDF's `package://` meshes besides `ROS_PACKAGE_PATH` and
+    /// `AMENT_PREFIX_PATH` (a package, or a folder of packages): the command line's
+    /// `--package-path`, not a key of the file.
+    #[serde(skip)]
+    pub package_paths: Vec<PathBuf>,
 }
 
 /// `robot: { urdf: bot.urdf, trajectory: {names, points}, visual_fallback, attach: [..] }`.

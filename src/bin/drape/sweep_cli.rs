@@ -9,6 +9,7 @@ use std::path::PathBuf;
 pub(crate) enum SweepCommand {
     /// Check a sweep file and print its job count and the first jobs' values.
     Plan {
+        /// Sweep file (YAML).
         file: PathBuf,
         /// Jobs to show.
         #[arg(long, default_value_t = 10)]
@@ -17,7 +18,9 @@ pub(crate) enum SweepCommand {
     /// Run one job (`--index`, else $SLURM_ARRAY_TASK_ID or $JOB_COMPLETION_INDEX) or, with
     /// `--local`, every job not yet done.
     Run {
+        /// Sweep file (YAML).
         file: PathBuf,
+        /// Job to run (default: $SLURM_ARRAY_TASK_ID, else $JOB_COMPLETION_INDEX).
         #[arg(long)]
         index: Option<usize>,
         /// Run every job on this machine.
@@ -42,6 +45,7 @@ pub(crate) enum SweepCommand {
     },
     /// Merge the job records of an output folder into manifest.jsonl and manifest.csv.
     Collect {
+        /// Output folder of a sweep (with its jobs' records).
         dir: PathBuf,
         /// Also hash every finished bag and compare it with its record's SHA-256.
         #[arg(long)]
@@ -58,6 +62,7 @@ pub(crate) enum SweepCommand {
 pub(crate) enum EmitTarget {
     /// An `sbatch` array script: one task per job.
     Slurm {
+        /// Sweep file (YAML).
         file: PathBuf,
         /// Script to write (default: stdout).
         #[arg(long)]
@@ -68,11 +73,13 @@ pub(crate) enum EmitTarget {
         /// The drape executable as the compute nodes see it (default: this one).
         #[arg(long)]
         drape: Option<PathBuf>,
+        /// CPUs per task (`#SBATCH --cpus-per-task`).
         #[arg(long, default_value_t = 1)]
         cpus_per_task: u32,
         /// Time limit per task, e.g. 00:30:00.
         #[arg(long)]
         time: Option<String>,
+        /// Slurm partition (`#SBATCH --partition`).
         #[arg(long)]
         partition: Option<String>,
         /// Most tasks at once.
@@ -84,15 +91,18 @@ pub(crate) enum EmitTarget {
     },
     /// A Kubernetes Indexed Job manifest: one completion per job.
     K8s {
+        /// Sweep file (YAML).
         file: PathBuf,
         /// Manifest to write (default: stdout).
         #[arg(long)]
         manifest: Option<PathBuf>,
+        /// Container image with the drape executable.
         #[arg(long, default_value = "drape:latest")]
         image: String,
         /// PersistentVolumeClaim with the sweep file, its scenes and the output.
         #[arg(long, default_value = "drape-data")]
         pvc: String,
+        /// Where the PersistentVolumeClaim is mounted in the container.
         #[arg(long, default_value = "/data")]
         mount: String,
         /// The sweep file inside the container (default: <mount>/<file name>).
@@ -101,12 +111,16 @@ pub(crate) enum EmitTarget {
         /// Output folder inside the container (default: <mount>/<name>.out).
         #[arg(long)]
         out: Option<String>,
+        /// Pods at once.
         #[arg(long, default_value_t = 10)]
         parallelism: usize,
+        /// Retries of failed pods before the Job fails.
         #[arg(long, default_value_t = 6)]
         backoff_limit: u32,
+        /// CPU request per pod.
         #[arg(long, default_value = "1")]
         cpu: String,
+        /// Memory request and limit per pod.
         #[arg(long, default_value = "2Gi")]
         memory: String,
     },

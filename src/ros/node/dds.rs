@@ -197,6 +197,15 @@ pub fn run_node(params: &NodeParams, stop: Arc<AtomicBool>) -> Result<NodeSummar
         None => Distro::from_env()?,
     };
     let mut scene = Scene::load(&params.scene)?;
+    scene.package_paths = params.package_paths.clone();
+    if !params.robot_description.trim().is_empty() {
+        if scene.robot.is_none() {
+            return Err(NodeError::DescriptionWithoutRobot {
+                scene: params.scene.clone(),
+            });
+        }
+        scene.robot_urdf_text = Some(params.robot_description.clone());
+    }
     let levels = &mut scene.solver.guard.max_contact_split_levels;
     levels.get_or_insert(params.max_contact_split_levels);
     let net = Network::from_env()?;

@@ -3,7 +3,7 @@
 //! ([`endpoints`]), each failure naming the endpoint.
 
 use super::network::Network;
-use super::params::{DescriptionSource, NodeParams, ServiceWire};
+use super::params::{NodeParams, ServiceWire};
 use super::NodeError;
 use crate::ros::msg::{
     Clock, DiagnosticArray, JointState, Marker, MarkerArray, PointCloud2, RosString,
@@ -96,21 +96,20 @@ pub fn endpoints(node: &mut Node, p: &NodeParams) -> Result<Endpoints, NodeError
     let joint_states = node
         .create_subscription(&js_t, Some(qos_sensor(10)))
         .map_err(|e| dds(&t.joint_states, e))?;
-    let description = match p.robot_description {
-        DescriptionSource::Topic => {
-            let tt = mk_topic(
-                node,
-                &t.robot_description,
-                "std_msgs",
-                "String",
-                &qos_latched(),
-            )?;
-            Some(
-                node.create_subscription(&tt, Some(qos_latched()))
-                    .map_err(|e| dds(&t.robot_description, e))?,
-            )
-        }
-        DescriptionSource::File => None,
+    let description = if p.robot_description_from_topic {
+        let tt = mk_topic(
+            node,
+            &t.robot_description,
+            "std_msgs",
+            "String",
+            &qos_latched(),
+        )?;
+        Some(
+            node.create_subscription(&tt, Some(qos_latched()))
+                .map_err(|e| dds(&t.robot_description, e))?,
+        )
+    } else {
+        None
     };
     let clock = if p.use_sim_time {
         let ct = mk_topic(node, &t.clock, "rosgraph_msgs", "Clock", &qos_sensor(1))?;

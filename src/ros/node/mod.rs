@@ -31,9 +31,7 @@ pub use joints::{Dropped, JointGate};
 pub use messages::{Command, DroppedInputs, Level, LoopStats, Output};
 pub use network::{Network, NetworkError};
 pub use pacer::{Pacer, Schedule};
-pub use params::{
-    parse_ros_args, DescriptionSource, NodeParams, ParamsError, RosArgs, ServiceWire,
-};
+pub use params::{parse_ros_args, NodeParams, ParamsError, RosArgs, ServiceWire};
 pub use quality::{
     lowest_quality, Decision, Quality, QualityBounds, QualityController, QualityStatus,
 };
@@ -52,6 +50,9 @@ pub enum NodeError {
     Network(#[from] NetworkError),
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
+    /// The `robot_description` parameter holds a URDF but the scene has no robot to load it as.
+    #[error("parameter `robot_description`: the scene {} has no `robot:` section to load it into", scene.display())]
+    DescriptionWithoutRobot { scene: std::path::PathBuf },
     #[error("node name `{name}` in namespace `{namespace}` is not a ROS name")]
     NodeName {
         name: String,

@@ -12,17 +12,6 @@ use crate::ros::Distro;
 use serde_yaml_ng::Value;
 use std::path::{Path, PathBuf};
 
-/// Where the robot description comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum DescriptionSource {
-    /// The URDF file named by the scene.
-    #[default]
-    File,
-    /// The `/robot_description` topic (transient-local); the scene's URDF file, when it can be
-    /// read, is used until the first description arrives.
-    Topic,
-}
-
 /// Which request/reply mapping the node's services use on the wire. ROS 2 rmw
 /// implementations disagree: Fast DDS uses the RPC-over-DDS "enhanced" mapping, Cyclone DDS
 /// its own header.
@@ -67,9 +56,18 @@ pub struct NodeParams {
     /// Node name (default `drape`) and namespace (default `/`).
     pub name: String,
     pub namespace: String,
-    /// Scene file (resolved against the parameters file's folder).
+    /// Scene file (a parameters file's value is resolved against that file's folder, a `-p`
+    /// value against the working directory).
     pub scene: PathBuf,
-    pub robot_description: DescriptionSource,
+    /// The robot's URDF as XML text, as `robot_state_publisher`'s parameter of that name holds
+    /// it; empty: the scene's `robot.urdf` file. Meshes are resolved against that file's folder.
+    pub robot_description: String,
+    /// Also follow the `robot_description` topic (transient-local): each URDF published there
+    /// reloads the robot; until one arrives the parameter's (or the scene's file) is used.
+    pub robot_description_from_topic: bool,
+    /// Folders searched for `package://` meshes besides `ROS_PACKAGE_PATH` and
+    /// `AMENT_PREFIX_PATH` (a parameters file's entries resolved against its folder).
+    pub package_paths: Vec<PathBuf>,
     /// Mesh, points and obstacles messages per second of (simulated) time. Live.
     pub publish_rate: f64,
     /// Obstacle markers per second (0: never).
@@ -108,7 +106,9 @@ impl Default for NodeParams {
             name: "drape".into(),
             namespace: "/".into(),
             scene: PathBuf::new(),
-            robot_description: DescriptionSource::File,
+            robot_description: String::new(),
+            robot_description_from_topic: false,
+            package_paths: Vec::new(),
             publish_rate: 30.0,
             obstacles_rate: 2.0,
             diagnostics_rate: 1.0,
@@ -191,20 +191,62 @@ fn split_assign(s: &str) -> Result<(&str, &str), ArgsError> {
 }
 
 impl NodeParams {
-    /// Reads a parameters file; the scene path is resolved against the file's folder.
-    pub fn load(path: &Path, node_name: &str) -> Result<NodeParams, ParamsError> {
-        let text = crate::input::read_text(path, crate::input::InputKind::NodeParams)?;
-        let mut p = Self::from_yaml(&text, &path.display().to_string(), node_name)?;
-        if p.scene.is_relative() {
-            if let Some(dir) = path.parent() {
-                p.scene = dir.join(&p.scene);
-            }
+    /// The parameters of node `node_name` from `files` in order (a later file's value wins, as
+    /// ROS merges them), then the `-p` overrides; checked once, at the end, so that a file may
+    /// leave the scene to the command line. Relative paths in a file are resolved against its
+    /// folder.
+    pub fn from_sources(
+        files: &[PathBuf],
+        overrides: &[(String, String)],
+        node_name: &str,
+    ) -> Result<NodeParams, ParamsError> {
+        let mut p = NodeParams {
+            name: node_name.to_string(),
+            ..NodeParams::default()
+        };
+        for file in files {
+            p.read_file(file, node_name)?;
         }
-        Ok(p)
+        p.set_overrides(overrides)?;
+        let origin = match (overrides.is_empty(), files.last()) {
+            (true, Some(f)) => f.display().to_string(),
+            (false, _) | (true, None) => Self::COMMAND_LINE.to_string(),
+        };
+        p.checked(&origin)
+    }
+
+    /// Reads one parameters file; relative paths are resolved against the file's folder.
+    pub fn load(path: &Path, node_name: &str) -> Result<NodeParams, ParamsError> {
+        Self::from_sources(&[path.to_path_buf()], &[], node_name)
     }
 
     /// Parses the `ros__parameters` of `node_name` from parameters-file text.
     pub fn from_yaml(text: &str, origin: &str, node_name: &str) -> Result<NodeParams, ParamsError> {
+        let mut p = NodeParams {
+            name: node_name.to_string(),
+            ..NodeParams::default()
+        };
+        p.merge_yaml(text, origin, node_name, None)?;
+        p.checked(origin)
+    }
+
+    /// Where `-p` values come from, in errors.
+    const COMMAND_LINE: &'static str = "command line";
+
+    fn read_file(&mut self, path: &Path, node_name: &str) -> Result<(), ParamsError> {
+        let text = crate::input::read_text(path, crate::input::InputKind::NodeParams)?;
+        self.merge_yaml(&text, &path.display().to_string(), node_name, path.parent())
+    }
+
+    /// Sets the parameters of `node_name`'s section of parameters-file text over `self`; the
+    /// file's relative paths are resolved against `dir`.
+    fn merge_yaml(
+        &mut self,
+        text: &str,
+        origin: &str,
+        node_name: &str,
+        dir: Option<&Path>,
+    ) -> Result<(), ParamsError> {
         if let Err(line) = crate::input::check_yaml_depth(text) {
             return Err(ParamsError::TooDeep {
                 origin: origin.into(),
@@ -216,81 +258,126 @@ impl NodeParams {
             origin: origin.into(),
             source,
         })?;
-        let section = [
+        let (section_name, node) = [
             node_name.to_string(),
             format!("/{node_name}"),
             "/**".to_string(),
         ]
-        .iter()
-        .find_map(|k| doc.get(k.as_str()))
+        .into_iter()
+        .find_map(|k| doc.get(k.as_str()).map(|v| (k, v)))
         .or_else(|| {
             // `/ns/name:` also names this node.
             doc.as_mapping()?.iter().find_map(|(k, v)| {
                 let k = k.as_str()?;
                 k.rsplit_once('/')
                     .filter(|(_, n)| *n == node_name)
-                    .map(|_| v)
+                    .map(|_| (k.to_string(), v))
             })
         })
-        .and_then(|s| s.get("ros__parameters"))
         .ok_or_else(|| ParamsError::NoSection {
             origin: origin.into(),
             node: node_name.into(),
         })?;
-        let mut flat = Vec::new();
-        flatten("", section, &mut flat);
-        let mut p = NodeParams {
-            name: node_name.to_string(),
-            ..NodeParams::default()
-        };
-        for (key, value) in flat {
-            p.set(&key, &value).map_err(|source| ParamsError::Invalid {
+        let section = node
+            .get("ros__parameters")
+            .ok_or_else(|| ParamsError::NoSection {
                 origin: origin.into(),
-                key: key.clone(),
-                source,
+                node: node_name.into(),
             })?;
+        let Value::Mapping(map) = section else {
+            return Err(ParamsError::NotAMapping {
+                origin: origin.into(),
+                section: section_name,
+                empty: section.is_null(),
+            });
+        };
+        let mut flat = Vec::new();
+        flatten("", &Value::Mapping(map.clone()), &mut flat);
+        for (key, value) in flat {
+            self.set(&key, &value)
+                .map_err(|source| ParamsError::Invalid {
+                    origin: origin.into(),
+                    key: key.clone(),
+                    source,
+                })?;
+            let Some(dir) = dir else { continue };
+            let resolve = |p: &mut PathBuf| {
+                if p.is_relative() {
+                    *p = dir.join(&*p);
+                }
+            };
+            match key.as_str() {
+                "scene" => resolve(&mut self.scene),
+                "package_paths" => self.package_paths.iter_mut().for_each(resolve),
+                _ => {}
+            }
         }
-        p.validate().map_err(|(key, source)| ParamsError::Invalid {
-            origin: origin.into(),
-            key: key.into(),
-            source,
-        })?;
-        Ok(p)
+        Ok(())
     }
 
-    /// Applies `-p name:=value` overrides (values parsed as YAML scalars).
+    /// Applies `-p name:=value` overrides (values parsed as YAML scalars, as ROS does, except
+    /// `robot_description`: URDF text is taken as it is) and checks the result.
     pub fn apply_overrides(&mut self, overrides: &[(String, String)]) -> Result<(), ParamsError> {
+        self.set_overrides(overrides)?;
+        self.validate()
+            .map_err(|(key, source)| ParamsError::Invalid {
+                origin: Self::COMMAND_LINE.into(),
+                key: key.into(),
+                source,
+            })
+    }
+
+    fn set_overrides(&mut self, overrides: &[(String, String)]) -> Result<(), ParamsError> {
         for (k, v) in overrides {
-            let value: Value =
-                serde_yaml_ng::from_str(v).unwrap_or_else(|_| Value::String(v.clone()));
+            let value = if k == "robot_description" {
+                Value::String(v.clone())
+            } else {
+                serde_yaml_ng::from_str(v).unwrap_or_else(|_| Value::String(v.clone()))
+            };
             self.set(k, &value).map_err(|source| ParamsError::Invalid {
-                origin: "command line".into(),
+                origin: Self::COMMAND_LINE.into(),
                 key: k.clone(),
                 source,
             })?;
         }
+        Ok(())
+    }
+
+    /// `self` if its cross-field checks pass, else the error naming `origin` and the key.
+    fn checked(self, origin: &str) -> Result<NodeParams, ParamsError> {
         self.validate()
             .map_err(|(key, source)| ParamsError::Invalid {
-                origin: "command line".into(),
+                origin: origin.into(),
                 key: key.into(),
                 source,
-            })
+            })?;
+        Ok(self)
     }
 
     fn set(&mut self, key: &str, v: &Value) -> Result<(), ParamError> {
         match key {
             "scene" => self.scene = PathBuf::from(string(v)?),
             "robot_description" => {
-                self.robot_description = match string(v)?.as_str() {
-                    "file" => DescriptionSource::File,
-                    "topic" => DescriptionSource::Topic,
-                    other => {
-                        return Err(ParamError::NotOneOf {
-                            expected: &["file", "topic"],
-                            got: other.to_string(),
-                        })
-                    }
+                let text = string(v)?;
+                let trimmed = text.trim_start();
+                if !(trimmed.is_empty() || trimmed.starts_with('<')) {
+                    return Err(ParamError::NotUrdf {
+                        got: text.chars().take(40).collect(),
+                    });
                 }
+                self.robot_description = text;
+            }
+            "robot_description_from_topic" => self.robot_description_from_topic = boolean(v)?,
+            "package_paths" => {
+                let Value::Sequence(s) = v else {
+                    return Err(ParamError::NotAList {
+                        got: Box::new(v.clone()),
+                    });
+                };
+                self.package_paths = s
+                    .iter()
+                    .map(|p| string(p).map(PathBuf::from))
+                    .collect::<Result<_, _>>()?;
             }
             "publish_rate" => self.publish_rate = number(v)?,
             "obstacles_rate" => self.obstacles_rate = number(v)?,

@@ -30,6 +30,14 @@ pub enum ParamsError {
     },
     #[error("{origin}: no `ros__parameters` for node `{node}` (expected `{node}:`, `/{node}:` or `/**:` at the top)")]
     NoSection { origin: String, node: String },
+    /// `ros__parameters:` with nothing under it (or not a mapping): its parameters are
+    /// probably indented wrongly.
+    #[error("{origin}: `{section}: ros__parameters:` {}", if *empty { "is empty: indent the parameters under it (e.g. `scene: my_scene.yaml`)" } else { "is not a mapping of parameter names to values" })]
+    NotAMapping {
+        origin: String,
+        section: String,
+        empty: bool,
+    },
     #[error("{origin}: parameter `{key}`")]
     Invalid {
         origin: String,
@@ -57,6 +65,11 @@ pub enum ParamError {
     Replaced { by: &'static str },
     #[error("expected a string, got {got:?}")]
     NotAString { got: Box<Value> },
+    /// `robot_description` holds URDF XML (as `robot_state_publisher`'s does), not a word.
+    #[error("expected the URDF's XML text (`<robot ...>`), got `{got}`; the scene's URDF file is used when this is empty, and `robot_description_from_topic: true` follows the topic")]
+    NotUrdf { got: String },
+    #[error("expected a list, got {got:?}")]
+    NotAList { got: Box<Value> },
     #[error("expected a number, got {got:?}")]
     NotANumber { got: Box<Value> },
     #[error("expected true or false, got {got:?}")]

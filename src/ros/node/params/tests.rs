@@ -6,7 +6,7 @@ const FILE: &str = "
 drape:
   ros__parameters:
     scene: robot_towel.yaml
-    robot_description: topic
+    robot_description_from_topic: true
     publish_rate: 20
     use_sim_time: true
     distro: humble
@@ -19,7 +19,8 @@ drape:
 fn reads_nested_ros_parameters() {
     let p = NodeParams::from_yaml(FILE, "f.yaml", "drape").unwrap();
     assert_eq!(p.scene, PathBuf::from("robot_towel.yaml"));
-    assert_eq!(p.robot_description, DescriptionSource::Topic);
+    assert!(p.robot_description_from_topic);
+    assert!(p.robot_description.is_empty());
     assert_eq!(p.publish_rate, 20.0);
     assert!(p.use_sim_time);
     assert_eq!(p.distro, Some(Distro::Humble));
@@ -168,4 +169,84 @@ fn joint_velocity_limits_on_by_default() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("joint_velocity_limits"), "{e}");
+}
+
+#[test]
+fn robot_description_holds_urdf_text() {
+    let urdf = "<robot name=\"r\">\n  <link name=\"a\"/> <!-- # not a comment -->\n</robot>";
+    let mut p = NodeParams::from_yaml(FILE, "f", "drape").unwrap();
+    // `-p` takes the XML as it is (a YAML reading would cut it at ` #`).
+    p.apply_overrides(&[("robot_description".into(), urdf.into())])
+        .unwrap();
+    assert_eq!(p.robot_description, urdf);
+    let text = format!("{FILE}    robot_description: |\n      <robot name=\"r\"/>\n");
+    let q = NodeParams::from_yaml(&text, "f", "drape").unwrap();
+    assert_eq!(q.robot_description.trim(), "<robot name=\"r\"/>");
+    // A word where the URDF belongs (a file name, `topic`) says what the parameter holds.
+    for word in ["topic", "file", "robot.urdf"] {
+        let bad = format!("{FILE}    robot_description: {word}\n");
+        let e = NodeParams::from_yaml(&bad, "f.yaml", "drape").unwrap_err();
+        assert!(
+            matches!(&e, ParamsError::Invalid { key, source: ParamError::NotUrdf { got }, .. }
+                if key == "robot_description" && got == word),
+            "{e:?}"
+        );
+        assert!(
+            crate::input::error_line(&e).contains("robot_description_from_topic"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn an_empty_parameters_block_is_named_with_its_file() {
+    let e = NodeParams::from_yaml("drape:\n  ros__parameters:\n", "p.yaml", "drape").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "p.yaml: `drape: ros__parameters:` is empty: indent the parameters under it (e.g. \
+         `scene: my_scene.yaml`)"
+    );
+    let e = NodeParams::from_yaml("/**:\n  ros__parameters: [1]\n", "p.yaml", "drape").unwrap_err();
+    assert!(
+        matches!(&e, ParamsError::NotAMapping { section, empty: false, .. } if section == "/**"),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn files_merge_in_order_and_overrides_complete_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    let b = dir.path().join("b");
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    let fa = a.join("p.yaml");
+    let fb = b.join("p.yaml");
+    std::fs::write(
+        &fa,
+        "drape:\n  ros__parameters:\n    scene: s.yaml\n    publish_rate: 10\n    package_paths: [pkgs]\n",
+    )
+    .unwrap();
+    std::fs::write(&fb, "drape:\n  ros__parameters:\n    paused: true\n").unwrap();
+    let p = NodeParams::from_sources(&[fa.clone(), fb.clone()], &[], "drape").unwrap();
+    // The second file keeps what it does not set; paths stay relative to the file that set them.
+    assert_eq!(
+        (p.scene.clone(), p.publish_rate, p.paused),
+        (a.join("s.yaml"), 10.0, true)
+    );
+    assert_eq!(p.package_paths, [a.join("pkgs")]);
+    // A file without the scene, completed by `-p` (relative to the working directory).
+    let o = [("scene".to_string(), "x/s.yaml".to_string())];
+    let p = NodeParams::from_sources(std::slice::from_ref(&fb), &o, "drape").unwrap();
+    assert_eq!(p.scene, PathBuf::from("x/s.yaml"));
+    // `-p` alone.
+    let p = NodeParams::from_sources(&[], &o, "drape").unwrap();
+    assert_eq!((p.scene, p.publish_rate), (PathBuf::from("x/s.yaml"), 30.0));
+    // Still no scene: named against the command line.
+    let o = [("paused".to_string(), "true".to_string())];
+    let e = NodeParams::from_sources(&[], &o, "drape").unwrap_err();
+    assert_eq!(
+        crate::input::error_line(&e),
+        "command line: parameter `scene`: missing: name the scene file"
+    );
 }
