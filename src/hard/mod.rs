@@ -1,6 +1,6 @@
 //! The hard-case catalogue: scenes at the edges of what the simulator promises (stiff, tiny, huge,
 //! fast, pinched, crumpled, degenerate, windy, long), each with explicit pass criteria, and a runner
-//! that records the worst values every step. `tests/hard_cases.rs` and `drape hard-cases` share it,
+//! that records the worst values every step. `tests/hard_cases.rs` and `drape dev hard-cases` share it,
 //! so the committed summary (`docs/hard_cases.md`) is what the tests check.
 
 mod cases;

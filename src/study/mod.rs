@@ -1,4 +1,4 @@
-//! `drape study`: what accuracy costs in time. Runs fixed reference scenes across the accuracy
+//! `drape dev study`: what accuracy costs in time. Runs fixed reference scenes across the accuracy
 //! knobs (integrator, step, CG tolerance and cap, resolution), measures cost and error against a
 //! cached fine-step RK4 reference, and writes `runs.csv`, `summary.md` and SVG plots.
 //!
