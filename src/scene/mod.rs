@@ -16,7 +16,7 @@ mod problem;
 mod validate;
 
 pub use error::{NameKind, SceneError};
-pub use problem::{Problem, MAX_VERTICES};
+pub use problem::{Problem, MAX_VERTICES, MIN_EDGE_LENGTH};
 
 pub use build::{build, build_with_robot};
 
