@@ -422,4 +422,12 @@ fn seam_gaps_print_in_a_unit_that_shows_their_digits() {
         e.contains("12.300 mm gap") && e.contains("tolerance 1.000 mm"),
         "{e}"
     );
+    let e = GarmentError::SeamLength {
+        seam: "s".into(),
+        a: 2e-5,
+        b: 1e-5,
+        max_mismatch: 0.2,
+    }
+    .to_string();
+    assert!(e.contains("20.000 µm and 10.000 µm long"), "{e}");
 }

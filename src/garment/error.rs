@@ -87,7 +87,7 @@ pub enum GarmentError {
         len: usize,
     },
     /// The two sides' lengths differ by more than `max_mismatch` (a fraction of the longer).
-    #[error("seam '{seam}': sides are {a:.3} m and {b:.3} m long, more than {}% apart", max_mismatch * 100.0)]
+    #[error("seam '{seam}': sides are {} and {} long, more than {}% apart", Length(*a), Length(*b), max_mismatch * 100.0)]
     SeamLength {
         seam: String,
         a: f64,
