@@ -186,8 +186,8 @@ impl Scene {
                     },
                 ));
             }
-            for (k, (size, res)) in c.grid.size.iter().zip(c.grid.resolution).enumerate() {
-                let edge = size / (res - 1) as f64;
+            let edges = [0, 1].map(|k| c.grid.size[k] / (c.grid.resolution[k] - 1) as f64);
+            for (k, &edge) in edges.iter().enumerate() {
                 if edge < MIN_EDGE_LENGTH {
                     return Err((
                         key(&format!("grid.size[{k}]")),
@@ -200,17 +200,13 @@ impl Scene {
             }
             pose(&key("grid.pose"), &c.grid.pose)?;
             self.validate_material(i, &c.material)?;
-            let edge = (0..2)
-                .map(|k| c.grid.size[k] / (c.grid.resolution[k] - 1) as f64)
-                .fold(f64::INFINITY, f64::min);
             contact.push((
                 key("material.thickness"),
                 n as f64,
-                c.material.thickness / edge,
+                c.material.thickness / edges[0].min(edges[1]),
             ));
             // The lightest vertex (a corner) carries a sixth of a grid cell.
-            let cell = c.grid.size[0] / (nu - 1) as f64 * c.grid.size[1] / (nv - 1) as f64;
-            let mass = c.material.density * cell / 6.0;
+            let mass = c.material.density * edges[0] * edges[1] / 6.0;
             if !mass.is_normal() {
                 return Err((key("material.density"), Problem::MassTooSmall { mass }));
             }
