@@ -85,7 +85,21 @@ garments:
 "#;
     let e = Scene::from_yaml(text, "bad.yaml").unwrap_err().to_string();
     assert!(
-        e.contains("bad.yaml") && e.contains("garments[0]") && e.contains("'front'"),
+        e.starts_with("bad.yaml: garments[0].panels[0].outline: ") && e.contains("'front'"),
+        "{e}"
+    );
+    // A seam's side is named down to the value at fault.
+    let mut g = two_panels();
+    g.seams[0].b.to = 7;
+    let scene = format!(
+        "effects: [stretch]\ngarments:\n{}",
+        indent(&serde_yaml_ng::to_string(&vec![g]).unwrap())
+    );
+    let e = Scene::from_yaml(&scene, "bad.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("bad.yaml: garments[0].seams[0].b.to: "),
         "{e}"
     );
 }
@@ -313,7 +327,7 @@ fn bad_material_and_schedule_values_are_rejected_by_key() {
     let mut g = two_panels();
     g.edge_length = 1e-5;
     let e = validate(&g).unwrap_err().to_string();
-    assert!(e.contains("'left'") && e.contains("triangles"), "{e}");
+    assert!(e.contains("'left'") && e.contains("vertices"), "{e}");
 }
 
 /// The two panels as a scene without a body: sewing in free space.
@@ -374,4 +388,46 @@ fn sewing_in_free_space_welds_and_a_weak_seam_fails_naming_it() {
         chain.contains("garments") && chain.contains("seam 'middle'") && chain.contains("gap"),
         "{chain}"
     );
+    // The message starts with the scene's file, then the seam's key.
+    assert!(
+        chain.starts_with("weak.yaml: garments[0].seams[0]: "),
+        "{chain}"
+    );
+}
+
+#[test]
+fn seam_gaps_print_in_a_unit_that_shows_their_digits() {
+    let open = |gap: f64, tolerance: f64| {
+        GarmentError::SeamOpen {
+            garment: "g".into(),
+            seam: "s".into(),
+            gap,
+            time: 4.0,
+            tolerance,
+        }
+        .to_string()
+    };
+    let e = open(2.5e-6, 1e-6);
+    assert!(
+        e.contains("2.500 µm gap") && e.contains("tolerance 1.000 µm"),
+        "{e}"
+    );
+    let e = open(3e-9, 1.5e-10);
+    assert!(
+        e.contains("3.000e-9 m gap") && e.contains("tolerance 1.500e-10 m"),
+        "{e}"
+    );
+    let e = open(0.0123, 0.001);
+    assert!(
+        e.contains("12.300 mm gap") && e.contains("tolerance 1.000 mm"),
+        "{e}"
+    );
+    let e = GarmentError::SeamLength {
+        seam: "s".into(),
+        a: 2e-5,
+        b: 1e-5,
+        max_mismatch: 0.2,
+    }
+    .to_string();
+    assert!(e.contains("20.000 µm and 10.000 µm long"), "{e}");
 }

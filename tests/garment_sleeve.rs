@@ -89,6 +89,8 @@ fn attachment_to_a_missing_link_is_a_clear_error() {
     scene.garments[0].attach[0].link = "tentacle".into();
     let e = scene.build().err().expect("build fails");
     // The scene error names the key; its source names the garment, the attachment and the link.
+    let head = format!("{}: garments[0].attach[0].link", path.display());
+    assert!(e.to_string().starts_with(&head), "{e}");
     let SceneError::Garment { source, .. } = &e else {
         panic!("not a garment error: {e}");
     };

@@ -25,6 +25,8 @@ const SLACK: u32 = 3;
 const KILL_AFTER: Duration = Duration::from_secs(10);
 /// Budget of a large input that must still succeed (or be refused by a documented limit).
 const LARGE_BUDGET: Duration = Duration::from_secs(20);
+/// Memory limit (address space) of a large input that must still succeed.
+const LARGE_MEMORY_LIMIT: u64 = 2 << 30;
 
 #[path = "common/tiny_scene.rs"]
 mod tiny_scene;
@@ -206,7 +208,27 @@ fn drape_limited(args: &[&std::ffi::OsStr], file_size: Option<u64>) -> Outcome {
 }
 
 fn drape_with(args: &[&std::ffi::OsStr], file_size: Option<u64>, kill_after: Duration) -> Outcome {
+    drape_within(args, file_size, kill_after, MEMORY_LIMIT)
+}
+
+/// A large input that must still succeed: [`LARGE_MEMORY_LIMIT`], killed after
+/// [`LARGE_BUDGET`] x [`SLACK`], on one worker thread so that the cases running beside it keep
+/// a core of the shared machine.
+fn drape_large(args: &[&std::ffi::OsStr]) -> Outcome {
+    drape_within(args, None, LARGE_BUDGET * SLACK, LARGE_MEMORY_LIMIT)
+}
+
+/// [`drape_with`] under another memory limit; above [`MEMORY_LIMIT`], on one worker thread.
+fn drape_within(
+    args: &[&std::ffi::OsStr],
+    file_size: Option<u64>,
+    kill_after: Duration,
+    memory: u64,
+) -> Outcome {
     let mut cmd = Command::new(binary());
+    if memory > MEMORY_LIMIT {
+        cmd.env("RAYON_NUM_THREADS", "1");
+    }
     cmd.args(args)
         .env("RUST_LOG", "error")
         .env("MALLOC_ARENA_MAX", "2")
@@ -218,8 +240,8 @@ fn drape_with(args: &[&std::ffi::OsStr], file_size: Option<u64>, kill_after: Dur
     unsafe {
         cmd.pre_exec(move || {
             let lim = libc::rlimit {
-                rlim_cur: MEMORY_LIMIT,
-                rlim_max: MEMORY_LIMIT,
+                rlim_cur: memory,
+                rlim_max: memory,
             };
             if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
                 return Err(std::io::Error::last_os_error());
@@ -2665,4 +2687,200 @@ fn a_non_finite_cloth_frame_is_an_error_not_a_blank_picture() {
     let before = l.hashes();
     let o = run(&os(&["render", s(&bag), "--out", s(&out), "--at", "0"]));
     judge("finite frame of the same bag", &l, &before, &o, Expect::Ok);
+}
+
+// ---------------------------------------------------------------- size of what a scene builds
+
+/// A scene of one garment whose panels are `panels` (YAML flow mappings), without seams, sewn
+/// for no time.
+fn garment_scene(edge_length: &str, panels: &[String]) -> String {
+    let mut text = String::from(
+        "name: NAMEXYZ\nduration: 0.04\neffects: [stretch, shear]\n\
+         solver: { integrator: implicit, dt: 0.02 }\ngarments:\n  - name: shirt\n",
+    );
+    text += &format!("    edge_length: {edge_length}\n");
+    text += "    sewing: { close_time: 0, max_time: 0.02 }\n    panels:\n";
+    for p in panels {
+        text += &format!("      - {p}\n");
+    }
+    text
+}
+
+/// A square panel of side `side` (m) named `name`.
+fn square_panel(name: &str, side: f64) -> String {
+    format!("{{ name: {name}, outline: [[0, 0], [{side}, 0], [{side}, {side}], [0, {side}]] }}")
+}
+
+/// Cloth that would take gigabytes (a grid, many panels, a long outline, self-contact on a cloth
+/// far thinner than its thickness, massless vertices) is refused from the scene file, naming the
+/// key, before anything is built.
+#[test]
+fn cloth_size_is_bounded_before_any_work() {
+    let grid = |from: &str, to: &str| with(SCENE, from, to);
+    scene_case(
+        "2000x2000 grid",
+        &grid("resolution: [4, 4]", "resolution: [2000, 2000]"),
+        "cloths[0].grid.resolution",
+    );
+    // Two grids of 60,000 vertices: each under the cap, together over it.
+    let two = format!(
+        "{}  - name: second\n    grid: {{ size: [1, 1], resolution: [300, 200] }}\n",
+        grid("resolution: [4, 4]", "resolution: [300, 200]")
+    );
+    scene_case(
+        "two grids over the cap together",
+        &two,
+        "cloths[1].grid.resolution",
+    );
+    // Twelve 0.66 m panels at 1 cm edges, about 11,400 vertices each: the ninth passes the cap.
+    let panels: Vec<String> = (0..12)
+        .map(|k| square_panel(&format!("p{k}"), 0.66))
+        .collect();
+    scene_case(
+        "12 panels over the cap together",
+        &garment_scene("0.01", &panels),
+        "garments[0].panels[8].outline",
+    );
+    let circle = |n: usize| {
+        let pts: Vec<String> = (0..n)
+            .map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / n as f64;
+                format!("[{:.9}, {:.9}]", 0.1 * a.cos(), 0.1 * a.sin())
+            })
+            .collect();
+        format!("{{ name: round, outline: [{}] }}", pts.join(", "))
+    };
+    scene_case(
+        "outline of 20,000 points",
+        &garment_scene("0.03", &[circle(20_000)]),
+        "garments[0].panels[0].outline",
+    );
+    // Found while dressing (after validation): the message still starts with the file.
+    let attach = with(
+        &garment_scene("0.03", &[square_panel("p", 0.3)]),
+        "    panels:",
+        "    attach: [ { link: hand, point: [0, 0, 0], radius: 0.1 } ]\n    panels:",
+    );
+    scene_case(
+        "garment attached without a robot",
+        &attach,
+        "garments[0].attach[0]",
+    );
+    scene_case(
+        "garment edge_length 1e-9",
+        &garment_scene("1e-9", &[square_panel("p", 0.3)]),
+        "garments[0].edge_length",
+    );
+    let self_contact = format!("{SCENE}collision: {{ self_collision: true }}\n");
+    scene_case(
+        "1e-9 m cloth with self-collision",
+        &with(&self_contact, "size: [0.2, 0.2]", "size: [1e-9, 1e-9]"),
+        "cloths[0].grid.size[0]",
+    );
+    scene_case(
+        "grid.size 1e-300",
+        &grid("size: [0.2, 0.2]", "size: [1e-300, 0.2]"),
+        "cloths[0].grid.size[0]",
+    );
+    scene_case(
+        "density 1e-310",
+        &grid("pins:", "material: { density: 1e-310 }\n    pins:"),
+        "cloths[0].material.density",
+    );
+    // A 0.1 mm cloth (edges above the floor) with the default 5 mm thickness: self-contact
+    // would hold every vertex against every other.
+    scene_case(
+        "thickness 500 edges with self-collision",
+        &with(&self_contact, "size: [0.2, 0.2]", "size: [3e-5, 3e-5]"),
+        "cloths[0].material.thickness",
+    );
+    scene_case(
+        "obstacle mesh scale 1e-320",
+        &format!("{SCENE}obstacles:\n  - {{ name: m, shape: {{ type: mesh, path: pkg/meshes/m.stl, scale: [1, 1e-320, 1] }} }}\n"),
+        "obstacles[0].shape.scale[1]",
+    );
+}
+
+/// Inside the bounds: a cloth at the edge floor with a thinner thickness self-collides, and a
+/// panel with a few hundred outline points meshes, both within the budget of any case.
+#[test]
+fn small_cloth_and_detailed_outlines_within_the_bounds_run() {
+    let l = Layout::new();
+    let floor = format!(
+        "{}collision: {{ self_collision: true }}\n",
+        with(
+            &with(SCENE, "size: [0.2, 0.2]", "size: [3e-5, 3e-5]"),
+            "pins:",
+            "material: { thickness: 1e-5 }\n    pins:"
+        )
+    );
+    let scene = l.scene(&floor);
+    let before = l.hashes();
+    judge(
+        "cloth at the edge floor",
+        &l,
+        &before,
+        &check(&scene),
+        Expect::Ok,
+    );
+    let o = record(&scene, &l.path("scene/out.mcap"), &[]);
+    judge(
+        "cloth at the edge floor, recorded",
+        &l,
+        &before,
+        &o,
+        Expect::Ok,
+    );
+    let pts: Vec<String> = (0..300)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 300.0;
+            format!("[{:.9}, {:.9}]", 0.1 * a.cos(), 0.1 * a.sin())
+        })
+        .collect();
+    let round = format!("{{ name: round, outline: [{}] }}", pts.join(", "));
+    let scene = l.scene(&garment_scene("0.02", &[round]));
+    let before = l.hashes();
+    judge(
+        "outline of 300 points",
+        &l,
+        &before,
+        &check(&scene),
+        Expect::Ok,
+    );
+}
+
+/// The largest grid a scene may have, with every effect and self-collision, is checked and a
+/// frame of it recorded within the budget and the memory of a large input.
+#[test]
+fn a_grid_at_the_vertex_cap_runs_in_the_memory_of_a_large_input() {
+    let l = Layout::new();
+    let text = with(
+        &with(
+            &with(
+                SCENE,
+                "effects: [gravity, stretch, shear]",
+                "effects: [gravity, stretch, shear, skip_one, bending, twist, damping]",
+            ),
+            "size: [0.2, 0.2], resolution: [4, 4]",
+            "size: [1.0, 1.0], resolution: [316, 316]",
+        ),
+        "pins:",
+        "material: { skip_one: 10, twist: 0.0001, thickness: 0.0007 }\n    pins:",
+    );
+    let text = with(&text, "duration: 0.1", "duration: 0.02");
+    let scene = l.scene(&format!("{text}collision: {{ self_collision: true }}\n"));
+    let out = l.path("scene/out.mcap");
+    for (name, args) in [
+        ("check at the cap", os(&["check", "--scene", s(&scene)])),
+        (
+            "record at the cap",
+            os(&["record", "--quiet", "--scene", s(&scene), "--out", s(&out)]),
+        ),
+    ] {
+        let before = l.hashes();
+        let a: Vec<&std::ffi::OsStr> = args.iter().map(|x| x.as_os_str()).collect();
+        let o = drape_large(&a);
+        judge_within(name, &l, &before, &o, Expect::Ok, LARGE_BUDGET);
+    }
+    assert!(report_only() || out.is_file());
 }

@@ -2,6 +2,7 @@
 //! variant naming the garment, panel or seam at fault and carrying the values, with the cause
 //! (a divergence, a collision-stage error) as its `source()`.
 
+use super::spec::{GarmentSpec, SeamSide};
 use crate::collide::StageError;
 use crate::sim::DivergenceError;
 use std::sync::Arc;
@@ -12,10 +13,21 @@ use std::sync::Arc;
 pub enum GarmentError {
     #[error("garment '{garment}': has no panels")]
     NoPanels { garment: String },
-    #[error("garment '{garment}': edge_length {edge_length} must be > 0")]
-    EdgeLength { garment: String, edge_length: f64 },
+    #[error(
+        "garment '{garment}': edge_length {edge_length:e} m must be finite and at least {min:e} m"
+    )]
+    EdgeLength {
+        garment: String,
+        edge_length: f64,
+        min: f64,
+    },
+    /// The material's density gives a vertex mass that is zero or subnormal.
+    #[error("garment '{garment}': material.density gives each vertex a mass of {mass:.3e} kg, too small to simulate")]
+    MassTooSmall { garment: String, mass: f64 },
     #[error("garment '{garment}': two panels are named '{panel}'")]
     DuplicatePanel { garment: String, panel: String },
+    #[error("garment '{garment}': two seams are named '{seam}'")]
+    DuplicateSeam { garment: String, seam: String },
     /// A material or sewing value out of range; `strictly`: it must be > 0, else >= 0.
     #[error("garment '{garment}': {key} = {value} must be finite and {}", if *strictly { "> 0" } else { ">= 0" })]
     Value {
@@ -75,7 +87,7 @@ pub enum GarmentError {
         len: usize,
     },
     /// The two sides' lengths differ by more than `max_mismatch` (a fraction of the longer).
-    #[error("seam '{seam}': sides are {a:.3} m and {b:.3} m long, more than {}% apart", max_mismatch * 100.0)]
+    #[error("seam '{seam}': sides are {} and {} long, more than {}% apart", Length(*a), Length(*b), max_mismatch * 100.0)]
     SeamLength {
         seam: String,
         a: f64,
@@ -91,10 +103,14 @@ pub enum GarmentError {
         edge: usize,
         other: String,
     },
-    #[error("seam '{seam}': a side was not resampled")]
-    NotResampled { seam: String },
-    #[error("panel '{panel}': meshing failed: {problem}")]
-    Mesh { panel: String, problem: MeshProblem },
+    #[error("garment '{garment}': seam '{seam}': a side was not resampled")]
+    NotResampled { garment: String, seam: String },
+    #[error("garment '{garment}': panel '{panel}': meshing failed: {problem}")]
+    Mesh {
+        garment: String,
+        panel: String,
+        problem: MeshProblem,
+    },
     #[error("garments '{garments}': the simulation diverged while sewing")]
     SewingDiverged {
         /// The garments being sewn, comma separated.
@@ -107,7 +123,7 @@ pub enum GarmentError {
         /// The garments being sewn, comma separated.
         garments: String,
     },
-    #[error("garment '{garment}': seam '{seam}' still has a {:.2} mm gap after {time:.2} s (tolerance {:.2} mm)", gap * 1e3, tolerance * 1e3)]
+    #[error("garment '{garment}': seam '{seam}' still has a {} gap after {time:.2} s (tolerance {})", Length(*gap), Length(*tolerance))]
     SeamOpen {
         garment: String,
         seam: String,
@@ -123,23 +139,148 @@ pub enum GarmentError {
     },
 }
 
+/// A length in metres printed with three decimals in the unit that keeps it readable (m, mm or
+/// µm; scientific below a micrometre), so a small gap never prints as zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Length(pub f64);
+
+impl std::fmt::Display for Length {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        let a = v.abs();
+        if !v.is_finite() || a == 0.0 {
+            write!(f, "{v} m")
+        } else if a >= 1.0 {
+            write!(f, "{v:.3} m")
+        } else if a >= 1e-3 {
+            write!(f, "{:.3} mm", v * 1e3)
+        } else if a >= 1e-6 {
+            write!(f, "{:.3} µm", v * 1e6)
+        } else {
+            write!(f, "{v:.3e} m")
+        }
+    }
+}
+
+impl GarmentError {
+    /// The garment at fault, for errors that concern one garment (not a sewing of several).
+    /// Pattern errors name only their panel or seam: [`GarmentError::key_in`] takes the garment.
+    pub fn garment(&self) -> Option<&str> {
+        use GarmentError::*;
+        match self {
+            NoPanels { garment }
+            | EdgeLength { garment, .. }
+            | MassTooSmall { garment, .. }
+            | DuplicatePanel { garment, .. }
+            | DuplicateSeam { garment, .. }
+            | Value { garment, .. }
+            | MaxTime { garment, .. }
+            | AttachShape { garment, .. }
+            | AttachNeedsRobot { garment, .. }
+            | AttachLink { garment, .. }
+            | AttachSelectsNothing { garment, .. }
+            | WeldCollapse { garment, .. }
+            | NotResampled { garment, .. }
+            | Mesh { garment, .. }
+            | SeamOpen { garment, .. } => Some(garment),
+            _ => None,
+        }
+    }
+
+    /// The key, within garment `g`'s section of a scene file, of the value at fault
+    /// (`panels[1].outline`, `seams[0].b.to`, `sewing.max_time`); empty when the error concerns
+    /// the garment as a whole. Panels and seams are found by name (unique in a valid garment).
+    pub fn key_in(&self, g: &GarmentSpec) -> String {
+        use GarmentError::*;
+        let panel = |name: &str| {
+            g.panels
+                .iter()
+                .rposition(|p| p.name == name)
+                .map_or_else(|| "panels".to_string(), |k| format!("panels[{k}]"))
+        };
+        let seam = |name: &str| g.seams.iter().rposition(|s| s.name == name);
+        // The side of seam `name` that names `panel` (and `index`, if given): `seams[s].a`.
+        let side = |name: &str, panel: &str, index: Option<usize>| {
+            let Some(k) = seam(name) else {
+                return "seams".to_string();
+            };
+            let s = &g.seams[k];
+            let fits =
+                |x: &SeamSide| x.panel == panel && index.is_none_or(|i| x.from == i || x.to == i);
+            let (letter, x) = if fits(&s.a) || !fits(&s.b) {
+                ("a", &s.a)
+            } else {
+                ("b", &s.b)
+            };
+            match index {
+                Some(i) if x.from == i => format!("seams[{k}].{letter}.from"),
+                Some(_) => format!("seams[{k}].{letter}.to"),
+                None => format!("seams[{k}].{letter}"),
+            }
+        };
+        let whole_seam =
+            |name: &str| seam(name).map_or_else(|| "seams".to_string(), |k| format!("seams[{k}]"));
+        match self {
+            NoPanels { .. } => "panels".into(),
+            EdgeLength { .. } | WeldCollapse { .. } => "edge_length".into(),
+            MassTooSmall { .. } => "material.density".into(),
+            DuplicatePanel { panel: p, .. } => format!("{}.name", panel(p)),
+            DuplicateSeam { seam: s, .. } => format!("{}.name", whole_seam(s)),
+            Value { key, .. } => (*key).into(),
+            MaxTime { .. } => "sewing.max_time".into(),
+            AttachShape { index, .. }
+            | AttachNeedsRobot { index, .. }
+            | AttachSelectsNothing { index, .. } => format!("attach[{index}]"),
+            AttachLink { index, .. } => format!("attach[{index}].link"),
+            Outline { panel: p, problem } => match problem {
+                OutlineProblem::NonFinitePlacement => format!("{}.placement", panel(p)),
+                OutlineProblem::WrapRadius { .. } => {
+                    format!("{}.placement.wrap.radius", panel(p))
+                }
+                _ => format!("{}.outline", panel(p)),
+            },
+            SelfIntersecting { panel: p, .. } => format!("{}.outline", panel(p)),
+            Mesh { panel: p, .. } => panel(p),
+            MissingPanel { seam: s, panel: p } => format!("{}.panel", side(s, p, None)),
+            SeamIndex {
+                seam: s,
+                panel: p,
+                index,
+                ..
+            } => side(s, p, Some(*index)),
+            EmptySeamSide { seam: s, panel: p }
+            | SeamOverlap {
+                seam: s, panel: p, ..
+            } => side(s, p, None),
+            SeamLength { seam: s, .. }
+            | NotResampled { seam: s, .. }
+            | SeamOpen { seam: s, .. } => whole_seam(s),
+            SewingDiverged { .. } | Cancelled { .. } | Stage { .. } => String::new(),
+        }
+    }
+}
+
 /// What is wrong with a panel's outline or placement.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum OutlineProblem {
     #[error("needs at least 3 points, has {count}")]
     TooFewPoints { count: usize },
+    #[error("has {count} points, more than the {max} an outline may have")]
+    TooManyPoints { count: usize, max: usize },
     #[error("point {point} is not finite")]
     NotFinite { point: usize },
     #[error("points {a} and {b} coincide")]
     Coincident { a: usize, b: usize },
     #[error("encloses no area")]
     ZeroArea,
+    /// The estimated vertices of all cloths of the scene up to this panel (meshed at
+    /// `edge_length`) pass `limit`.
     #[error(
-        "would mesh into ~{triangles:.0} triangles at edge_length {edge_length} (limit {limit})"
+        "meshed at edge_length {edge_length:e} m, brings the scene's cloth to about {vertices:.0} vertices, more than the {limit} a scene may have (all cloths and garments together)"
     )]
-    TooManyTriangles {
-        triangles: f64,
+    TooManyVertices {
+        vertices: f64,
         edge_length: f64,
         limit: usize,
     },

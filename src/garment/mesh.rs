@@ -7,6 +7,7 @@
 use super::error::{GarmentError, MeshProblem};
 use super::pattern::{outline, polyline_length, stretch_edges, stretch_points};
 use super::spec::{GarmentSpec, PanelSpec, SeamSide};
+use crate::scene::MAX_VERTICES;
 use glam::DVec2;
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
@@ -137,13 +138,15 @@ pub fn min_angle_deg(p: [DVec2; 3]) -> f64 {
         .fold(180.0, f64::min)
 }
 
-/// Meshes a panel whose boundary loop is given (see [`boundary`]).
+/// Meshes a panel of garment `garment` whose boundary loop is given (see [`boundary`]).
 pub fn mesh_panel(
+    garment: &str,
     panel: &PanelSpec,
     loop_pts: &[DVec2],
     edge_length: f64,
 ) -> Result<PanelMesh, GarmentError> {
     let fail = |problem: MeshProblem| GarmentError::Mesh {
+        garment: garment.to_string(),
         panel: panel.name.clone(),
         problem,
     };
@@ -157,7 +160,8 @@ pub fn mesh_panel(
     }
     let target_area = 3f64.sqrt() / 4.0 * edge_length * edge_length;
     let area = super::pattern::signed_area(loop_pts).abs();
-    let budget = (20.0 * area / target_area) as usize + 10 * nb + 100;
+    // Never more than a whole scene may hold, whatever the outline makes refinement do.
+    let budget = ((20.0 * area / target_area) as usize + 10 * nb + 100).min(MAX_VERTICES);
     let result = cdt.refine(
         RefinementParameters::<f64>::new()
             .exclude_outer_faces(true)
@@ -226,12 +230,13 @@ pub struct GarmentMesh {
 
 /// Meshes every panel of a validated garment so that paired seam sides match vertex for vertex.
 pub fn mesh_garment(g: &GarmentSpec) -> Result<GarmentMesh, GarmentError> {
-    let panel_of = |name: &str| {
-        g.panels
-            .iter()
-            .position(|p| p.name == name)
+    let indices = super::pattern::panel_indices(g);
+    let panel_of = |seam: &str, name: &str| {
+        indices
+            .get(name)
+            .copied()
             .ok_or_else(|| GarmentError::MissingPanel {
-                seam: String::new(),
+                seam: seam.to_string(),
                 panel: name.to_string(),
             })
     };
@@ -239,7 +244,10 @@ pub fn mesh_garment(g: &GarmentSpec) -> Result<GarmentMesh, GarmentError> {
     let mut per_panel: Vec<Vec<(&SeamSide, usize, usize, usize)>> =
         vec![Vec::new(); g.panels.len()];
     for (si, s) in g.seams.iter().enumerate() {
-        let (pa, pb) = (panel_of(&s.a.panel)?, panel_of(&s.b.panel)?);
+        let (pa, pb) = (
+            panel_of(&s.name, &s.a.panel)?,
+            panel_of(&s.name, &s.b.panel)?,
+        );
         let la = polyline_length(&stretch_points(&outline(&g.panels[pa]), &s.a));
         let lb = polyline_length(&stretch_points(&outline(&g.panels[pb]), &s.b));
         let segs = seam_segments(g, la, lb);
@@ -258,12 +266,13 @@ pub fn mesh_garment(g: &GarmentSpec) -> Result<GarmentMesh, GarmentError> {
                 vertices: verts[k].clone(),
             });
         }
-        panels.push(mesh_panel(p, &loop_pts, g.edge_length)?);
+        panels.push(mesh_panel(&g.name, p, &loop_pts, g.edge_length)?);
     }
     let mut seams = Vec::with_capacity(g.seams.len());
     for (s, [a, b]) in g.seams.iter().zip(sides) {
         let (Some(a), Some(mut b)) = (a, b) else {
             return Err(GarmentError::NotResampled {
+                garment: g.name.clone(),
                 seam: s.name.clone(),
             });
         };

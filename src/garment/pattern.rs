@@ -4,6 +4,7 @@
 
 use super::error::{GarmentError, OutlineProblem};
 use super::spec::{GarmentSpec, PanelSpec, SeamSide, SeamSpec};
+use crate::scene::{MAX_VERTICES, MIN_EDGE_LENGTH};
 use glam::DVec2;
 
 /// Largest accepted relative difference of the two sides of a seam: `|La - Lb| / max(La, Lb)`.
@@ -53,6 +54,12 @@ pub fn validate_outline(p: &PanelSpec) -> Result<(), GarmentError> {
     let n = pts.len();
     if n < 3 {
         return Err(bad(OutlineProblem::TooFewPoints { count: n }));
+    }
+    if n > MAX_OUTLINE_POINTS {
+        return Err(bad(OutlineProblem::TooManyPoints {
+            count: n,
+            max: MAX_OUTLINE_POINTS,
+        }));
     }
     if let Some(i) = pts.iter().position(|q| !q.is_finite()) {
         return Err(bad(OutlineProblem::NotFinite { point: i }));
@@ -112,38 +119,72 @@ pub fn polyline_length(pts: &[DVec2]) -> f64 {
     pts.windows(2).map(|w| (w[1] - w[0]).length()).sum()
 }
 
-/// Validates every panel and seam of a garment.
+/// Vertices a panel is estimated to mesh into at `edge_length`, before any meshing: the refined
+/// interior (refinement splits triangles above the equilateral area of the target edge, so
+/// about two triangles, one vertex, per such area) plus [`BOUNDARY_GRADING`] vertices per
+/// boundary vertex. The boundary keeps every outline point and splits each outline edge into
+/// segments of the target length; a seam side takes its longer partner's count, at most
+/// `1 / (1 - MAX_SEAM_MISMATCH)` times its own.
+pub fn estimated_vertices(p: &PanelSpec, edge_length: f64) -> f64 {
+    let pts = outline(p);
+    let n = pts.len();
+    let boundary: f64 = (0..n)
+        .map(|i| {
+            (pts[(i + 1) % n] - pts[i]).length() / edge_length / (1.0 - MAX_SEAM_MISMATCH) + 1.0
+        })
+        .sum();
+    let target = 3f64.sqrt() / 4.0 * edge_length * edge_length;
+    signed_area(&pts).abs() / target + BOUNDARY_GRADING * boundary
+}
+
+/// Vertices a panel's mesh has per boundary vertex beyond its area's share: refinement grades
+/// the triangles from the boundary's spacing up to the target edge, so an outline of points
+/// much closer than `edge_length` fills its panel with about three vertices per boundary
+/// vertex (measured on circles of 1000 points); four bounds it.
+pub const BOUNDARY_GRADING: f64 = 4.0;
+
+/// Validates every panel and seam of a garment, the garment alone within
+/// [`MAX_VERTICES`](crate::scene::MAX_VERTICES).
 pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
+    validate_within(g, 0.0, MAX_VERTICES).map(|_| ())
+}
+
+/// Validates every panel and seam of a garment whose scene already holds `before` vertices
+/// (other cloths and garments, estimated), refusing the panel with which the estimated total
+/// passes `max` before any panel is meshed. Returns the garment's estimated vertices.
+pub fn validate_within(g: &GarmentSpec, before: f64, max: usize) -> Result<f64, GarmentError> {
     if g.panels.is_empty() {
         return Err(GarmentError::NoPanels {
             garment: g.name.clone(),
         });
     }
-    if !(g.edge_length.is_finite() && g.edge_length > 0.0) {
+    if !(g.edge_length.is_finite() && g.edge_length >= MIN_EDGE_LENGTH) {
         return Err(GarmentError::EdgeLength {
             garment: g.name.clone(),
             edge_length: g.edge_length,
+            min: MIN_EDGE_LENGTH,
         });
     }
     validate_parameters(g)?;
-    for (k, p) in g.panels.iter().enumerate() {
-        if g.panels[..k].iter().any(|q| q.name == p.name) {
+    let mut names = std::collections::HashSet::new();
+    let mut total = before;
+    for p in &g.panels {
+        if !names.insert(p.name.as_str()) {
             return Err(GarmentError::DuplicatePanel {
                 garment: g.name.clone(),
                 panel: p.name.clone(),
             });
         }
         validate_outline(p)?;
-        // Refinement halves triangles above the equilateral area of the target edge.
-        let triangles = 2.0 * signed_area(&outline(p)).abs()
-            / (3f64.sqrt() / 4.0 * g.edge_length * g.edge_length);
-        if triangles > MAX_TRIANGLES {
+        total += estimated_vertices(p, g.edge_length);
+        // NaN: an area that overflowed.
+        if total.is_nan() || total > max as f64 {
             return Err(GarmentError::Outline {
                 panel: p.name.clone(),
-                problem: OutlineProblem::TooManyTriangles {
-                    triangles,
+                problem: OutlineProblem::TooManyVertices {
+                    vertices: total,
                     edge_length: g.edge_length,
-                    limit: MAX_TRIANGLES as usize,
+                    limit: max,
                 },
             });
         }
@@ -163,20 +204,38 @@ pub fn validate(g: &GarmentSpec) -> Result<(), GarmentError> {
             }
         }
     }
+    let panels = panel_indices(g);
     // Edges already claimed by a seam, per panel: a boundary edge is sewn at most once.
     let mut used: Vec<Vec<Option<String>>> = g
         .panels
         .iter()
         .map(|p| vec![None; p.outline.len()])
         .collect();
+    let mut seams = std::collections::HashSet::new();
     for s in &g.seams {
-        validate_seam(g, s, &mut used)?;
+        if !seams.insert(s.name.as_str()) {
+            return Err(GarmentError::DuplicateSeam {
+                garment: g.name.clone(),
+                seam: s.name.clone(),
+            });
+        }
+        validate_seam(g, &panels, s, &mut used)?;
     }
-    Ok(())
+    Ok(total - before)
 }
 
-/// Largest estimated triangle count of one panel.
-pub const MAX_TRIANGLES: f64 = 1e6;
+/// Each panel's index by name (names are unique in a validated garment; the first wins).
+pub fn panel_indices(g: &GarmentSpec) -> std::collections::HashMap<&str, usize> {
+    let mut out = std::collections::HashMap::new();
+    for (k, p) in g.panels.iter().enumerate() {
+        out.entry(p.name.as_str()).or_insert(k);
+    }
+    out
+}
+
+/// Most points a panel's outline may have: a real pattern piece has a few hundred at most, and
+/// checking an outline for self-intersection takes time quadratic in its points.
+pub const MAX_OUTLINE_POINTS: usize = 1000;
 
 /// Material, sewing schedule and attachment values.
 fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
@@ -211,6 +270,14 @@ fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
             });
         }
     }
+    // Each vertex carries about the area of an equilateral triangle of the target edge.
+    let mass = m.density * 3f64.sqrt() / 4.0 * g.edge_length * g.edge_length;
+    if !mass.is_normal() {
+        return Err(GarmentError::MassTooSmall {
+            garment: g.name.clone(),
+            mass,
+        });
+    }
     if !(s.max_time.is_finite() && s.max_time > s.close_time) {
         return Err(GarmentError::MaxTime {
             garment: g.name.clone(),
@@ -231,12 +298,13 @@ fn validate_parameters(g: &GarmentSpec) -> Result<(), GarmentError> {
 
 fn validate_seam(
     g: &GarmentSpec,
+    panels: &std::collections::HashMap<&str, usize>,
     s: &SeamSpec,
     used: &mut [Vec<Option<String>>],
 ) -> Result<(), GarmentError> {
     let mut lengths = [0.0; 2];
     for (k, side) in [&s.a, &s.b].into_iter().enumerate() {
-        let Some(pi) = g.panels.iter().position(|p| p.name == side.panel) else {
+        let Some(&pi) = panels.get(side.panel.as_str()) else {
             return Err(GarmentError::MissingPanel {
                 seam: s.name.clone(),
                 panel: side.panel.clone(),

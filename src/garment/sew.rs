@@ -1,7 +1,7 @@
 //! The sewing stage: panels placed around the body, seam springs closing along the schedule with
 //! gravity and wind off and collisions on, then the weld and the switch to normal simulation.
 
-use super::error::{GarmentError, MeshProblem, SharedStageError};
+use super::error::{GarmentError, Length, MeshProblem, SharedStageError};
 use super::mesh::mesh_garment;
 use super::pattern;
 use super::placement::place;
@@ -47,6 +47,7 @@ pub fn assemble(g: &GarmentSpec) -> Result<(Cloth, Vec<SeamPairs>), GarmentError
             m.triangles.clone(),
         )
         .map_err(|reason| GarmentError::Mesh {
+            garment: g.name.clone(),
             panel: p.name.clone(),
             problem: MeshProblem::Panel(reason),
         })?;
@@ -238,9 +239,9 @@ pub fn dress(
             });
         }
         log::info!(
-            "garment '{}': sewn in {time:.2} s ({steps} steps), largest gap {:.3} mm, {} -> {} vertices",
+            "garment '{}': sewn in {time:.2} s ({steps} steps), largest gap {}, {} -> {} vertices",
             g.name,
-            seam_gaps.iter().map(|s| s.1).fold(0.0, f64::max) * 1e3,
+            Length(seam_gaps.iter().map(|s| s.1).fold(0.0, f64::max)),
             sub.len(),
             welded.cloth.len()
         );

@@ -4,7 +4,7 @@
 
 use super::{NameKind, RobotSpec, Scene, SceneError, Selection};
 use crate::cloth::{Cloth, Panel, Piece};
-use crate::collide::CollisionStage;
+use crate::collide::{CollisionStage, ShapeSpec};
 use crate::effects::{EffectPlan, Lattice, WindPlan};
 use crate::integrate::ImplicitSettings;
 use crate::robot::driver::link_obstacles;
@@ -122,19 +122,38 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
     let mut sim = Simulation::new(cloth, effects, integrator, frames, settings);
     if let Some(stage) = collision {
         for o in stage.overlaps(&sim.cloth.x) {
-            log::warn!("scene '{}': {o}", scene.name);
+            log::warn!("{}: {o}", scene.origin());
         }
         sim.set_collision(stage);
     }
     if !scene.garments.is_empty() {
         crate::garment::dress(&mut sim, &scene.garments, &plan, driver.as_mut()).map_err(
             |source| SceneError::Garment {
-                origin: scene.name.clone(),
+                origin: scene.origin().to_string(),
+                key: garment_key(&scene.garments, &source),
                 source: Box::new(source),
             },
         )?;
     }
     Ok((sim, driver))
+}
+
+/// The key of a dressing error: `garments[i].` and the value at fault in garment `i` (garment
+/// names are unique in a validated scene), or `garments` for the sewing of them all.
+fn garment_key(
+    garments: &[crate::garment::GarmentSpec],
+    e: &crate::garment::GarmentError,
+) -> String {
+    let Some(i) = e
+        .garment()
+        .and_then(|name| garments.iter().position(|g| g.name == name))
+    else {
+        return "garments".into();
+    };
+    match e.key_in(&garments[i]) {
+        k if k.is_empty() => format!("garments[{i}]"),
+        k => format!("garments[{i}].{k}"),
+    }
 }
 
 fn unknown(scene: &Scene, key: String, kind: NameKind, name: &str) -> SceneError {
@@ -336,9 +355,15 @@ fn build_collision(
     let roots = scene.mesh_roots();
     let mut obstacles = Vec::with_capacity(scene.obstacles.len());
     for (i, spec) in scene.obstacles.iter().enumerate() {
+        // A mesh is scaled by its loader, which bounds the scale and the scaled vertices.
+        let mut spec = spec.clone();
+        let scale = match &mut spec.shape {
+            ShapeSpec::Mesh { scale, .. } => Vec3::from(std::mem::replace(scale, [1.0; 3])),
+            _ => Vec3::ONE,
+        };
         let o = spec
             .build(|path: &str| {
-                crate::mesh::load_mesh_within(&base.join(path), Vec3::ONE, &roots)
+                crate::mesh::load_mesh_within(&base.join(path), scale, &roots)
                     .map(|m| (m.vertices, m.indices))
             })
             .map_err(|source| SceneError::Obstacle {

@@ -115,10 +115,12 @@ pub enum SceneError {
         #[source]
         source: Box<StageError>,
     },
-    /// The scene's garments could not be dressed (key `garments`).
-    #[error("{origin}: garments")]
+    /// The scene's garments could not be dressed (key: the garment's value at fault, or
+    /// `garments` when the sewing of them all failed).
+    #[error("{origin}: {key}")]
     Garment {
         origin: String,
+        key: String,
         #[source]
         source: Box<crate::garment::GarmentError>,
     },
@@ -141,11 +143,11 @@ impl SceneError {
             | SceneError::Trajectory { key, .. }
             | SceneError::Grasp { key, .. }
             | SceneError::NonFinitePose { key, .. }
-            | SceneError::Obstacle { key, .. } => Some(key),
+            | SceneError::Obstacle { key, .. }
+            | SceneError::Garment { key, .. } => Some(key),
             SceneError::LinkObstacle { .. } => Some("robot.urdf"),
             SceneError::Collision { .. } => Some("collision"),
             SceneError::Robot { .. } => Some("robot.urdf"),
-            SceneError::Garment { .. } => Some("garments"),
             _ => None,
         }
     }

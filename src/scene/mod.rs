@@ -17,7 +17,7 @@ mod problem;
 mod validate;
 
 pub use error::{NameKind, SceneError};
-pub use problem::{Problem, MAX_VERTICES};
+pub use problem::{Problem, MAX_VERTICES, MIN_EDGE_LENGTH};
 
 pub use build::{build, build_with_robot};
 pub use lint::{lint, Warning, WarningKind};

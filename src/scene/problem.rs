@@ -52,8 +52,29 @@ pub enum Problem {
     GarmentsAndCloths,
     #[error("needs at least {min} vertices each way (got {got:?})")]
     TooFewVertices { got: [usize; 2], min: usize },
-    #[error("more than {max} vertices")]
-    TooManyVertices { max: usize },
+    /// All cloths of the scene together (grids and estimated garment meshes) pass
+    /// [`MAX_VERTICES`]; `count` is the total up to and including this value.
+    #[error(
+        "the scene's cloth would have {count:.0} vertices, more than the {max} a scene may have (all cloths and garments together)"
+    )]
+    TooManyVertices { count: f64, max: usize },
+    /// A grid or garment edge shorter than [`MIN_EDGE_LENGTH`].
+    #[error("gives {edge:.3e} m edges, shorter than the {min:e} m a cloth edge may be")]
+    EdgeTooShort { edge: f64, min: f64 },
+    /// Self-collision on cloth whose thickness spans many of its edges: every vertex keeps
+    /// the rest neighbours within its thickness, so the cost grows with `(1 + ratio)^2`.
+    #[error(
+        "with self_collision, {vertices:.0} vertices with a thickness {ratio:.3} times their shortest edge bring the scene's self-contact load (vertices x (1 + thickness / edge)^2, over all cloths) to {load:.3e}, more than {max:e}: use fewer vertices, a smaller thickness or no self_collision"
+    )]
+    SelfContactTooLarge {
+        vertices: f64,
+        ratio: f64,
+        load: f64,
+        max: f64,
+    },
+    /// A vertex mass (areal density times the area a vertex carries) that is zero or subnormal.
+    #[error("gives each vertex a mass of {mass:.3e} kg, too small to simulate")]
+    MassTooSmall { mass: f64 },
     #[error("give exactly one of vertex, vertices, region, near")]
     SelectionForm,
     #[error("vertex {vertex} out of range (cloth has {count})")]
@@ -72,9 +93,24 @@ pub enum Problem {
 
 pub(super) type Invalid = (String, Problem);
 
-/// Largest grid accepted (vertices): a typo such as `resolution: [10000, 10000]` must not
-/// allocate gigabytes.
-pub const MAX_VERTICES: usize = 4_000_000;
+/// Most cloth vertices a scene may have, all grids and garments together (a garment's vertices
+/// estimated from its outlines and `edge_length` before any meshing). A vertex takes about
+/// 4.8 kB to build and check and 9.5 kB to record (implicit integrator, every effect; peak
+/// resident memory of `drape check` / `drape record` on grids of 200x200 to 316x316), so
+/// everything accepted is built in about 0.5 GB and recorded in about 1 GB, well under 2 GB
+/// (self-contact adds its own load, bounded by [`MAX_SELF_CONTACT_LOAD`]).
+pub const MAX_VERTICES: usize = 100_000;
+/// Most self-contact load a scene with `self_collision` may have: the sum over its cloths of
+/// `vertices (1 + thickness / shortest edge)^2`. Self-contact keeps, per vertex, the rest
+/// neighbours within its thickness, so its memory grows with that ratio squared: measured at
+/// 1.6 to 2.2 kB per unit of load on top of the vertex's own, this bounds it to about 330 MB
+/// (37,500 vertices with a thickness of one edge record in 0.6 GB; a 1e-9 m cloth is refused
+/// outright).
+pub const MAX_SELF_CONTACT_LOAD: f64 = 150_000.0;
+/// Shortest cloth edge (m), of a grid (`size / (resolution - 1)`) or a garment (`edge_length`):
+/// ten micrometres, far below any woven thread's spacing, and far above lengths whose squares
+/// (areas, masses) leave f64's normal range.
+pub const MIN_EDGE_LENGTH: f64 = 1e-5;
 /// Largest coordinate, size or distance (m): far inside f64's range, so squared distances,
 /// products with rates and sums over a grid stay finite.
 pub const MAX_LENGTH: f64 = crate::robot::kinematics::MAX_LENGTH;

@@ -120,14 +120,38 @@ impl Scene {
         if !self.garments.is_empty() && !self.cloths.is_empty() {
             return Err(("garments".into(), Problem::GarmentsAndCloths));
         }
+        // Estimated vertices of every cloth so far, against MAX_VERTICES.
+        let mut total = 0.0;
+        // Per cloth: its thickness key, estimated vertices, thickness over shortest edge.
+        let mut contact: Vec<(String, f64, f64)> = Vec::new();
+        let mut garment_names = std::collections::HashSet::new();
         for (i, g) in self.garments.iter().enumerate() {
-            crate::garment::pattern::validate(g)
-                .map_err(|e| (format!("garments[{i}]"), Problem::Garment(e)))?;
+            if !garment_names.insert(g.name.as_str()) {
+                return Err((
+                    format!("garments[{i}].name"),
+                    Problem::Duplicate {
+                        name: g.name.clone(),
+                    },
+                ));
+            }
+            let n =
+                crate::garment::pattern::validate_within(g, total, MAX_VERTICES).map_err(|e| {
+                    let key = match e.key_in(g) {
+                        k if k.is_empty() => format!("garments[{i}]"),
+                        k => format!("garments[{i}].{k}"),
+                    };
+                    (key, Problem::Garment(e))
+                })?;
+            total += n;
+            contact.push((
+                format!("garments[{i}].material.thickness"),
+                n,
+                g.material.thickness / g.edge_length,
+            ));
             // Sewing runs until the seams close or `max_time`: bound its steps like a run's.
             self.check_run_length(g.sewing.max_time.max(self.solver.dt))
                 .map_err(|p| (format!("garments[{i}].sewing.max_time"), p))?;
         }
-        let mut total = 0usize;
         let mut cloth_names = std::collections::HashSet::new();
         for (i, c) in self.cloths.iter().enumerate() {
             let key = |k: &str| format!("cloths[{i}].{k}");
@@ -151,18 +175,41 @@ impl Scene {
                     },
                 ));
             }
-            let n = nu
-                .checked_mul(nv)
-                .filter(|&n| n <= MAX_VERTICES)
-                .ok_or_else(|| {
-                    (
-                        key("grid.resolution"),
-                        Problem::TooManyVertices { max: MAX_VERTICES },
-                    )
-                })?;
-            total += n;
+            let n = nu.saturating_mul(nv);
+            total += n as f64;
+            if total > MAX_VERTICES as f64 {
+                return Err((
+                    key("grid.resolution"),
+                    Problem::TooManyVertices {
+                        count: total,
+                        max: MAX_VERTICES,
+                    },
+                ));
+            }
+            let edges = [0, 1].map(|k| c.grid.size[k] / (c.grid.resolution[k] - 1) as f64);
+            for (k, &edge) in edges.iter().enumerate() {
+                if edge < MIN_EDGE_LENGTH {
+                    return Err((
+                        key(&format!("grid.size[{k}]")),
+                        Problem::EdgeTooShort {
+                            edge,
+                            min: MIN_EDGE_LENGTH,
+                        },
+                    ));
+                }
+            }
             pose(&key("grid.pose"), &c.grid.pose)?;
             self.validate_material(i, &c.material)?;
+            contact.push((
+                key("material.thickness"),
+                n as f64,
+                c.material.thickness / edges[0].min(edges[1]),
+            ));
+            // The lightest vertex (a corner) carries a sixth of a grid cell.
+            let mass = c.material.density * edges[0] * edges[1] / 6.0;
+            if !mass.is_normal() {
+                return Err((key("material.density"), Problem::MassTooSmall { mass }));
+            }
             for (k, p) in c.pins.iter().enumerate() {
                 check_selection(&key(&format!("pins[{k}]")), p, n)?;
             }
@@ -184,11 +231,8 @@ impl Scene {
         crate::collide::validate_obstacles(&self.obstacles, "obstacles")
             .map_err(|e| (e.path, Problem::Collision(e.problem)))?;
         self.validate_collision()?;
-        if total > MAX_VERTICES {
-            return Err((
-                "cloths".into(),
-                Problem::TooManyVertices { max: MAX_VERTICES },
-            ));
+        if self.collision.self_collision {
+            self_contact_load(&contact)?;
         }
         Ok(())
     }
@@ -503,8 +547,20 @@ fn validate_obstacles(obstacles: &[ObstacleSpec]) -> Result<(), Invalid> {
                 len("half_height", *half_height)?;
             }
             ShapeSpec::Mesh { scale, .. } => {
+                // The mesh loader's bounds, named by key here (a subnormal scale is not a scale).
                 for (a, s) in scale.iter().enumerate() {
-                    len(&format!("scale[{a}]"), *s)?;
+                    let k = key(&format!("shape.scale[{a}]"));
+                    positive(&k, *s, crate::mesh::MAX_SCALE, "")?;
+                    if *s < crate::mesh::MIN_SCALE {
+                        return Err((
+                            k,
+                            Problem::TooSmall {
+                                value: *s,
+                                min: crate::mesh::MIN_SCALE,
+                                unit: "",
+                            },
+                        ));
+                    }
                 }
             }
             ShapeSpec::Plane { normal } => bounded3(&key("shape.normal"), *normal, MAX_LENGTH, "")?,
@@ -526,6 +582,27 @@ fn validate_obstacles(obstacles: &[ObstacleSpec]) -> Result<(), Invalid> {
                 }
             }
             MotionSpec::Static | MotionSpec::External => {}
+        }
+    }
+    Ok(())
+}
+
+/// The self-contact load of every cloth, `vertices (1 + thickness / edge)^2` summed, against
+/// [`MAX_SELF_CONTACT_LOAD`]; the cloth whose thickness passes it is named.
+fn self_contact_load(cloths: &[(String, f64, f64)]) -> Result<(), Invalid> {
+    let mut load = 0.0;
+    for (key, vertices, ratio) in cloths {
+        load += vertices * (1.0 + ratio) * (1.0 + ratio);
+        if load.is_nan() || load > MAX_SELF_CONTACT_LOAD {
+            return Err((
+                key.clone(),
+                Problem::SelfContactTooLarge {
+                    vertices: *vertices,
+                    ratio: *ratio,
+                    load,
+                    max: MAX_SELF_CONTACT_LOAD,
+                },
+            ));
         }
     }
     Ok(())
