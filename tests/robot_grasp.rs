@@ -336,3 +336,37 @@ fn bad_grasp_rules_name_their_key() {
     let msg = build_error(|t| t.replace("close_below: 0.012", "close_below: 0.012, squeeze: 1"));
     assert!(msg.contains("squeeze"), "{msg}");
 }
+
+/// A grasp takes hold of a garment as of a grid cloth: its candidates are the welded garment's
+/// vertices, named by the garment's name. The bundled sleeve, with a grasp whose pads box spans
+/// the middle of the upper arm the sleeve is sewn around and whose finger joint starts closed.
+#[test]
+fn a_grasp_takes_hold_of_a_sewn_garment() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("config/sleeve.yaml")).unwrap();
+    let urdf = root().join("urdf/drape_bot.urdf");
+    let text = text
+        .replace("../urdf/drape_bot.urdf", &urdf.display().to_string())
+        .replace(
+            "collision: { mode: continuous }",
+            "  grasps:\n    - { link: left_upper_arm, fingers: [right_finger_a_joint], close_below: 0.012, \
+             open_above: 0.02, pads: { xyz: [0.0, 0.0, -0.12], half_extents: [0.1, 0.1, 0.03] }, \
+             cloth: sleeve }\ncollision: { mode: continuous }",
+        );
+    let path = dir.path().join("sleeve_grasp.yaml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}", drape::input::error_chain(&e)));
+    let (mut sim, mut driver) = scene
+        .build_with_robot()
+        .unwrap_or_else(|e| panic!("{}", drape::input::error_chain(&e)));
+    let d = driver.as_mut().expect("a robot scene");
+    let t = sim.time() + sim.settings.dt;
+    d.advance(&mut sim, t);
+    sim.step().expect("a step");
+    let held = d.grasps()[0].held().len();
+    // The pads box spans 6 cm of a 22 cm sleeve around the whole arm: a fair share of the
+    // garment's vertices, every one of them inside the box.
+    assert!(held >= 10, "the grasp holds {held} sleeve vertices");
+    let frame = d.grasps()[0].held().first().copied().expect("held");
+    assert!(sim.cloth.kinematic_of(frame).is_some());
+}

@@ -98,10 +98,6 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
         }
     }
 
-    if let (Some(r), Some(d)) = (&scene.robot, driver.as_mut()) {
-        add_grasps(scene, r, d, &cloth, &mut frames)?;
-    }
-
     let plan = scene.effect_plan();
     let effects = plan.build(&cloth, &Lattice(&cloth));
     let integrator = scene.solver.integrator.build(ImplicitSettings {
@@ -134,6 +130,11 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
                 source: Box::new(source),
             },
         )?;
+    }
+    // After dressing: a grasp's candidates are the vertices of the cloth as the run starts,
+    // garments welded.
+    if let (Some(r), Some(d)) = (&scene.robot, driver.as_mut()) {
+        add_grasps(scene, r, d, &sim.cloth, &mut sim.frames)?;
     }
     Ok((sim, driver))
 }
