@@ -330,6 +330,52 @@ fn bad_material_and_schedule_values_are_rejected_by_key() {
     assert!(e.contains("'left'") && e.contains("vertices"), "{e}");
 }
 
+/// A garment's material is held to the same bounds as a grid cloth's, named by its key; a free
+/// mesh has no shear springs, so `shear: 0` is not an error even where the effect is named.
+#[test]
+fn garment_materials_have_the_bounds_of_cloth_materials() {
+    let scene = |edit: &dyn Fn(&mut GarmentSpec)| {
+        let mut g = two_panels();
+        edit(&mut g);
+        format!(
+            "effects: [stretch, shear, bending]\ngarments:\n{}",
+            indent(&serde_yaml_ng::to_string(&vec![g]).unwrap())
+        )
+    };
+    for (edit, key) in [
+        (
+            &(|g: &mut GarmentSpec| g.material.stretch = 1e300) as &dyn Fn(&mut GarmentSpec),
+            "garments[0].material.stretch",
+        ),
+        (
+            &|g: &mut GarmentSpec| g.material.density = 1e9,
+            "garments[0].material.density",
+        ),
+        (
+            &|g: &mut GarmentSpec| g.material.bend_warp = 1e30,
+            "garments[0].material.bend_warp",
+        ),
+        (
+            &|g: &mut GarmentSpec| g.material.friction = 1e6,
+            "garments[0].material.friction",
+        ),
+        (
+            &|g: &mut GarmentSpec| g.material.thickness = 5.0,
+            "garments[0].material.thickness",
+        ),
+    ] {
+        let e = Scene::from_yaml(&scene(edit), "bad.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with(&format!("bad.yaml: {key}: ")), "{e}");
+        assert!(e.contains("at most"), "{e}");
+    }
+    let shear_free = scene(&|g: &mut GarmentSpec| g.material.shear = 0.0);
+    if let Err(e) = Scene::from_yaml(&shear_free, "ok.yaml") {
+        assert!(!e.to_string().contains("material.shear"), "{e}");
+    }
+}
+
 /// The two panels as a scene without a body: sewing in free space.
 fn two_panel_scene(sewing: &str) -> String {
     let g = serde_yaml_ng::to_string(&two_panels()).unwrap();

@@ -134,6 +134,7 @@ impl Scene {
                     },
                 ));
             }
+            self.validate_material(&format!("garments[{i}]"), &g.material, false)?;
             let n =
                 crate::garment::pattern::validate_within(g, total, MAX_VERTICES).map_err(|e| {
                     let key = match e.key_in(g) {
@@ -199,7 +200,7 @@ impl Scene {
                 }
             }
             pose(&key("grid.pose"), &c.grid.pose)?;
-            self.validate_material(i, &c.material)?;
+            self.validate_material(&format!("cloths[{i}]"), &c.material, true)?;
             contact.push((
                 key("material.thickness"),
                 n as f64,
@@ -406,11 +407,20 @@ impl Scene {
         Ok(())
     }
 
-    fn validate_material(&self, i: usize, m: &crate::cloth::Material) -> Result<(), Invalid> {
-        let key = |k: &str| format!("cloths[{i}].material.{k}");
+    /// A cloth's or a garment's material (`at`: `cloths[0]` or `garments[0]`). A garment is a
+    /// free mesh: it has no shear or skip-one springs, so those keys may be zero whatever the
+    /// effects say; every key is held to the same bounds.
+    fn validate_material(
+        &self,
+        at: &str,
+        m: &crate::cloth::Material,
+        lattice: bool,
+    ) -> Result<(), Invalid> {
+        let key = |k: &str| format!("{at}.material.{k}");
         positive(&key("density"), m.density, MAX_DENSITY, " kg/m^2")?;
         let needs = |e: EffectKind, v: f64, name: &str| {
-            if self.has(e) {
+            let springs_of_a_lattice = matches!(e, EffectKind::Shear | EffectKind::SkipOne);
+            if self.has(e) && (lattice || !springs_of_a_lattice) {
                 positive(&key(name), v, MAX_STIFFNESS, " N/m")
             } else {
                 non_negative(&key(name), v, MAX_STIFFNESS, " N/m")
