@@ -337,8 +337,8 @@ impl Simulation {
         let feedback = &self.coupling.feedback;
         let r = stage.resolve(&self.work.x_start, x, v, inv_mass, span.h, feedback);
         m.add_collision(&r);
-        self.guard
-            .collided(Energies::of(&self.cloth, &self.model.effects));
+        let after = Energies::of(&self.cloth, &self.model.effects);
+        self.guard.collided(after, r.unresolved);
     }
 
     /// Stage 9: the guard's verdict on the state the substep ends in (see

@@ -77,6 +77,8 @@ pub(super) struct Guard {
     obstacle_speed: f64,
     /// Whether the substep under way is checked after its collision pass.
     watching: bool,
+    /// Cloth-cloth pairs the last collision pass left unresolved.
+    unresolved: usize,
     /// Fast-contact splitting and the strain check switched off (for the cost comparison of
     /// `benches/fast_links.rs`).
     contact_checks_off: bool,
@@ -161,8 +163,11 @@ impl Guard {
 
     /// The collision pass changed the state to energy `after`: a moving obstacle can push
     /// energy into the cloth, so the budget widens by any gain.
-    pub fn collided(&mut self, after: super::energy::Energies) {
+    /// After the collision pass: its energies, and whether the self-contact fail-safe gave up
+    /// on any pair (`unresolved`).
+    pub fn collided(&mut self, after: super::energy::Energies, unresolved: usize) {
         self.book.collided(after);
+        self.unresolved = unresolved;
     }
 
     /// Stage 3, before the solve: books the substep's start and returns its energies (the
@@ -275,9 +280,16 @@ impl Guard {
                 m.contact_splits_refused += 1;
             }
         }
+        // A tangle the fail-safe gave up on is redone in halves while the guard may split; past
+        // that it stands, counted in `unresolved_contacts` (a WARN on `/diagnostics`).
+        if redo.is_none() && self.unresolved > 0 && span.depth < g.split_levels() {
+            redo = Some(Redo::Split(Why::Tangle));
+        }
         let Some(redo) = redo else {
             return Ok(());
         };
+        // The rolled-back pass's tangle is not the state the step keeps.
+        m.unresolved_contacts -= self.unresolved;
         std::mem::swap(&mut cloth.x, x0);
         std::mem::swap(&mut cloth.v, v0);
         self.book = saved.book;

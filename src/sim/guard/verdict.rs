@@ -20,6 +20,9 @@ pub(in crate::sim) enum Why {
     /// The collision pass moved a vertex more than fast contact allows (see
     /// [`crate::sim::fast::jumped`]).
     ResponseJump,
+    /// The self-contact fail-safe gave up on pairs of the cloth (a tangle): a shorter substep
+    /// gives its impact zones less relative motion to undo.
+    Tangle,
 }
 
 /// The first vertex (flat index) a check found bad, and what it measured there.
@@ -47,7 +50,7 @@ impl Why {
     /// rejected result) or for fast contact (predicted, or the response's jump).
     pub fn count(self, m: &mut StepMetrics) {
         match self {
-            Why::Stability | Why::Rejected => m.subdivisions += 1,
+            Why::Stability | Why::Rejected | Why::Tangle => m.subdivisions += 1,
             Why::FastContact | Why::ResponseJump => m.contact_splits += 1,
         }
     }
