@@ -545,6 +545,8 @@ fn record(args: RecordArgs) -> Result<()> {
         distro,
         frame_id,
         wall_time_in_bag,
+        scene_file: Some(scene_path.clone()),
+        scene_name: Some(scene.name.clone()),
         ..RecordOptions::default()
     };
 
