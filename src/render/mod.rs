@@ -11,16 +11,23 @@
 mod animation;
 mod draw;
 mod frames;
+pub mod label;
 mod marker;
 pub mod obstacles;
 mod options;
 pub mod raster;
+mod recorded;
 mod shapes;
+mod view;
 
 pub use draw::{draw_frame, sheet};
-pub use frames::{bounds, read_frames, Frame};
-pub use options::{Pick, RenderError, RenderOptions, WriteError, MAX_SHEET_PIXELS};
+pub use frames::{read_frames, Frame, CLOTH_PALETTE};
+pub use options::{
+    Pick, RenderError, RenderOptions, WriteError, DEFAULT_SHEET_WIDTH, DEFAULT_TILE,
+    MAX_SHEET_PIXELS,
+};
 pub use raster::{Camera, Image, Mesh, Raster};
+pub use view::{bounds, view, View, DEFAULT_AZIMUTH};
 
 use std::path::{Path, PathBuf};
 
@@ -44,8 +51,8 @@ pub fn tiles(bags: &[PathBuf], o: &RenderOptions) -> Result<Vec<Vec<Image>>, Ren
                 height: o.height,
             });
         }
-        let b = bounds(&frames);
-        out.push(frames.iter().map(|f| draw_frame(f, b, o)).collect());
+        let v = view(&frames, o);
+        out.push(frames.iter().map(|f| draw_frame(f, &v, o)).collect());
     }
     Ok(out)
 }
