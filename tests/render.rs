@@ -441,3 +441,97 @@ fn obstacles_of_the_scene_a_bag_names_are_drawn_when_the_bag_lacks_them() {
         assert!(is_obstacle(pixel(&rgb, (x, y))), "{centre:?}");
     }
 }
+
+/// A bag only names a scene file: the folders its robot's meshes may come from are the ones
+/// that scene allows (its folder here), so a mesh elsewhere is refused before it is opened, and
+/// a scene path naming a FIFO neither blocks nor stops the picture.
+#[test]
+fn a_bag_cannot_widen_where_robot_meshes_come_from() {
+    use drape::ros::bag::{BagWriter, RunInfo};
+    use drape::ros::msg::{Marker, Point, RosString, TFMessage};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    for sub in ["scene", "outside", "elsewhere"] {
+        std::fs::create_dir_all(d.join(sub)).expect("folder");
+    }
+    let head = Path::new(env!("CARGO_MANIFEST_DIR")).join("urdf/meshes/head.stl");
+    for inside in ["scene/m.stl", "outside/m.stl"] {
+        std::fs::copy(&head, d.join(inside)).expect("mesh");
+    }
+    let yaml = d.join("scene/s.yaml");
+    std::fs::write(
+        &yaml,
+        format!("{}robot: {{ urdf: bot.urdf }}\n", scene(0.3, "")),
+    )
+    .expect("scene");
+    let fifo = d.join("scene/fifo.yaml");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    let bag = |name: &str, mesh: &Path, scene: &Path| {
+        let bag = d.join(name);
+        let mut w = BagWriter::create(&bag).expect("bag");
+        w.write_run_info(&RunInfo {
+            scene: Some(scene.to_path_buf()),
+            ..RunInfo::default()
+        })
+        .expect("metadata");
+        let jazzy = drape::ros::Distro::Jazzy;
+        let desc = w
+            .add_topic::<RosString>("/robot_description", jazzy, None)
+            .expect("topic");
+        let urdf = format!(
+            r#"<robot name="r"><link name="base"><collision><geometry><mesh filename="file://{}"/></geometry></collision></link></robot>"#,
+            mesh.display()
+        );
+        w.write(desc, 0, &RosString { data: urdf }).expect("urdf");
+        let tf = w.add_topic::<TFMessage>("/tf", jazzy, None).expect("topic");
+        w.write(tf, 0, &TFMessage::default()).expect("tf");
+        let mesh_topic = w
+            .add_topic::<Marker>("/drape/mesh", jazzy, None)
+            .expect("topic");
+        let p = |x: f64, y: f64| Point { x, y, z: 0.3 };
+        let m = Marker {
+            r#type: Marker::TRIANGLE_LIST,
+            points: vec![p(-0.3, -0.3), p(0.3, -0.3), p(0.3, 0.3)],
+            ..Marker::default()
+        };
+        w.write(mesh_topic, 0, &m).expect("frame");
+        w.finish().expect("finish");
+        bag
+    };
+    let allowed = bag("allowed.mcap", &d.join("scene/m.stl"), &yaml);
+    let (err, rgb) = render_in(d, &allowed, "allowed.png", &[]);
+    assert!(
+        count(&rgb, is_robot) > 300,
+        "the mesh in the scene's folder is drawn: {err}"
+    );
+    let outside = bag("outside.mcap", &d.join("outside/m.stl"), &yaml);
+    let (err, rgb) = render_in(d, &outside, "outside.png", &[]);
+    assert!(err.contains("outside the allowed"), "{err}");
+    assert_eq!(count(&rgb, is_robot), 0);
+    // A FIFO for a scene: the input rules refuse it without opening it for reading.
+    let fifo_bag = bag("fifo.mcap", &d.join("scene/m.stl"), &fifo);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drape"))
+        .current_dir(d.join("elsewhere"))
+        .args(["render".as_ref(), fifo_bag.as_os_str(), "--out".as_ref()])
+        .arg(d.join("fifo.png"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("drape runs");
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("drape blocked on a FIFO named as the bag's scene");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(status.success());
+}

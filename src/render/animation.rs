@@ -122,7 +122,7 @@ pub(super) fn render_gif(
         src.markers(&unique, |_, t, m| {
             let f = src.frame(t, &m)?;
             e.add(&f);
-            if seen % every == 0 {
+            if seen.is_multiple_of(every) {
                 sample.push(f);
             }
             seen += 1;

@@ -4,8 +4,8 @@
 use super::raster::Image;
 
 /// Glyph cell: 5 columns and 7 rows of pixels, one column of space after each glyph.
-pub const GLYPH_W: usize = 5;
-pub const GLYPH_H: usize = 7;
+const GLYPH_W: usize = 5;
+const GLYPH_H: usize = 7;
 const ADVANCE: usize = GLYPH_W + 1;
 /// Colour of the text and of the one-pixel halo that keeps it legible over dark shapes.
 const INK: [u8; 3] = [30, 32, 40];
@@ -46,7 +46,7 @@ fn glyph(c: char) -> [u8; 7] {
         'd' => [0x01, 0x01, 0x0D, 0x13, 0x11, 0x11, 0x0F],
         'e' => [0x00, 0x00, 0x0E, 0x11, 0x1F, 0x10, 0x0E],
         'f' => [0x06, 0x09, 0x08, 0x1C, 0x08, 0x08, 0x08],
-        'g' => [0x00, 0x0F, 0x11, 0x11, 0x0F, 0x01, 0x0E],
+        'g' => [0x00, 0x0F, 0x11, 0x0F, 0x01, 0x11, 0x0E],
         'h' => [0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11],
         'i' => [0x04, 0x00, 0x0C, 0x04, 0x04, 0x04, 0x0E],
         'j' => [0x02, 0x00, 0x06, 0x02, 0x02, 0x12, 0x0C],
@@ -91,7 +91,8 @@ fn glyph(c: char) -> [u8; 7] {
     }
 }
 
-/// Pixel scale of the text on a `width` x `height` tile: 1 up to 399 pixels a side, then 2.
+/// Pixel scale of the text on a `width` x `height` tile: 1, and one more per 400 pixels of the
+/// shorter side (at most 4).
 pub fn scale_for(width: usize, height: usize) -> usize {
     (width.min(height) / 400 + 1).min(4)
 }

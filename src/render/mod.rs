@@ -1,17 +1,22 @@
 //! `drape render`: pictures of recorded bags without ROS or Foxglove, for dataset thumbnails and
 //! the README.
 //!
-//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker), `/drape/obstacles` (the scene's
-//! own obstacles, one Marker each, when it has any; see [`obstacles`]) and, for robot scenes,
-//! `/robot_description` and `/tf`: the robot's collision shapes are drawn at the link poses of
-//! the frame. Planes are drawn as a square under what the tile frames. Each picked frame of each bag is one tile, shaded by the software rasteriser in
-//! [`raster`]; tiles are laid out in a grid (bags side by side by default, or the frames of one
-//! bag as a strip). A `.gif` output animates the frames instead.
+//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker; each cloth piece the bag's metadata
+//! lists in its own colour), `/drape/obstacles` (the scene's own obstacles, one Marker each, when
+//! it has any; see [`obstacles`]) and, for robot scenes, `/robot_description` and `/tf`: the
+//! robot's collision shapes are drawn at the link poses of the frame. The scene file the bag's
+//! metadata names is read again (see `recorded.rs`) to find the robot's meshes where the
+//! recording found them and to draw the scene's static obstacles a bag lacks. Planes are drawn as
+//! a square under what the tile frames. Each picked frame of each bag is one tile, shaded by the
+//! software rasteriser in [`raster`], seen from the side that shows the most cloth ([`view()`])
+//! and labelled with the scene's name and the time; tiles are laid out in a grid (bags side by
+//! side by default, or the frames of one bag as a strip). A `.gif` output animates the frames
+//! instead.
 
 mod animation;
 mod draw;
 mod frames;
-pub mod label;
+mod label;
 mod marker;
 pub mod obstacles;
 mod options;
