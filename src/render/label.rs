@@ -93,18 +93,13 @@ fn glyph(c: char) -> [u8; 7] {
 
 /// Pixel scale of the text on a `width` x `height` tile: 1, and one more per 400 pixels of the
 /// shorter side (at most 4).
-pub fn scale_for(width: usize, height: usize) -> usize {
+fn scale_for(width: usize, height: usize) -> usize {
     (width.min(height) / 400 + 1).min(4)
-}
-
-/// Width in pixels of `text` at `scale`.
-pub fn text_width(text: &str, scale: usize) -> usize {
-    (text.chars().count() * ADVANCE).saturating_sub(1) * scale
 }
 
 /// Writes `text` with its top left corner at `(x, y)`, clipped to the image: dark glyphs in a
 /// light halo one pixel (at `scale`) wide.
-pub fn draw_text(img: &mut Image, x: usize, y: usize, text: &str, scale: usize) {
+fn draw_text(img: &mut Image, x: usize, y: usize, text: &str, scale: usize) {
     let scale = scale.max(1);
     let mut ink = Vec::new();
     for (k, c) in text.chars().enumerate() {
@@ -141,7 +136,7 @@ pub fn draw_text(img: &mut Image, x: usize, y: usize, text: &str, scale: usize) 
 
 /// The label of a tile: the scene's name on the first line, the time on the second, in the
 /// top left corner.
-pub fn draw_label(img: &mut Image, name: &str, seconds: f64) {
+pub(super) fn draw_label(img: &mut Image, name: &str, seconds: f64) {
     let scale = scale_for(img.width, img.height);
     let margin = 4 * scale;
     draw_text(img, margin, margin, name, scale);
@@ -152,6 +147,11 @@ pub fn draw_label(img: &mut Image, name: &str, seconds: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Width in pixels of `text` at `scale`.
+    fn text_width(text: &str, scale: usize) -> usize {
+        (text.chars().count() * ADVANCE).saturating_sub(1) * scale
+    }
 
     #[test]
     fn every_printable_ascii_letter_and_digit_has_its_own_glyph() {
