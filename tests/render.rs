@@ -535,3 +535,42 @@ fn a_bag_cannot_widen_where_robot_meshes_come_from() {
     };
     assert!(status.success());
 }
+
+/// Meshes the recording found through `--package-path` are found again from the bag when the
+/// folder holds ROS packages (a `package.xml`); any other folder the bag lists is not searched.
+#[test]
+fn package_folders_the_recording_searched_are_searched_again_when_they_hold_packages() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    robot_package(d, false);
+    let package = d.join("ws/drape_bot");
+    std::fs::create_dir_all(package.join("meshes")).expect("package");
+    let head = Path::new(env!("CARGO_MANIFEST_DIR")).join("urdf/meshes/head.stl");
+    std::fs::copy(&head, package.join("meshes/head.stl")).expect("mesh");
+    std::fs::write(package.join("package.xml"), "<package/>").expect("package.xml");
+    std::fs::create_dir_all(d.join("scene")).expect("scene folder");
+    std::fs::create_dir_all(d.join("elsewhere")).expect("cwd");
+    let yaml = d.join("scene/cape.yaml");
+    std::fs::write(&yaml, CAPE).expect("scene");
+    let bag = d.join("cape.mcap");
+    drape_in(
+        &d.join("elsewhere"),
+        &[
+            "record".as_ref(),
+            "--quiet".as_ref(),
+            yaml.as_os_str(),
+            "--out".as_ref(),
+            bag.as_os_str(),
+            "--package-path".as_ref(),
+            d.join("ws").as_os_str(),
+        ],
+    );
+    let (err, rgb) = render_in(d, &bag, "found.png", &[]);
+    assert!(!err.contains("not found"), "{err}");
+    let with_head = count(&rgb, is_robot);
+    std::fs::remove_file(package.join("package.xml")).expect("package.xml removed");
+    let (err, rgb) = render_in(d, &bag, "plain.png", &[]);
+    assert!(err.contains("not a ROS package folder"), "{err}");
+    assert!(err.contains("head.stl"), "{err}");
+    assert!(count(&rgb, is_robot) < with_head);
+}

@@ -571,6 +571,7 @@ fn record(args: RecordArgs) -> Result<()> {
         wall_time_in_bag,
         scene_file: Some(scene_path.clone()),
         scene_name: Some(scene.name.clone()),
+        package_paths: scene.package_paths.clone(),
         ..RecordOptions::default()
     };
 

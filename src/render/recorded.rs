@@ -3,10 +3,12 @@
 //! read again to find the robot's meshes where `drape record` found them and to draw the
 //! scene's static obstacles when the bag does not carry them.
 //!
-//! The bag is not trusted to widen where meshes may come from: it only names a scene file,
-//! which is read through the input rules, and the folders allowed are the ones that scene
-//! allows `drape record` (its folder, its `mesh_paths`, its URDF's package), plus the user's
-//! `--package-path` and the ROS environment.
+//! The bag is trusted little with where meshes may come from: it names a scene file, read
+//! through the input rules, whose folders are the ones it allows `drape record` (its folder, its
+//! `mesh_paths`, its URDF's package); and the package folders the run searched, of which only
+//! ROS packages count (a folder holding a `package.xml`, or a folder of such folders), so a bag
+//! cannot open an arbitrary folder to its URDF. The user's `--package-path` and the ROS
+//! environment are searched as well.
 
 use super::marker::MarkerHead;
 use crate::robot::UrdfOptions;
@@ -60,8 +62,19 @@ impl Recorded {
     /// How to load the bag's URDF so that its meshes are found as the run found them: the
     /// URDF's folder (from the scene, else the first `package_paths` entry) and the options.
     pub fn urdf_options(&self, package_paths: &[PathBuf]) -> (Option<PathBuf>, UrdfOptions) {
+        let mut search = package_paths.to_vec();
+        for p in &self.info.package_paths {
+            if holds_ros_packages(p) && !search.contains(p) {
+                search.push(p.clone());
+            } else if !search.contains(p) {
+                log::warn!(
+                    "{}: not searched for the robot's meshes: not a ROS package folder (no package.xml in it or its subfolders)",
+                    p.display()
+                );
+            }
+        }
         let mut opts = UrdfOptions {
-            search_paths: package_paths.to_vec(),
+            search_paths: search,
             skip_missing_meshes: true,
             ..UrdfOptions::default()
         };
@@ -111,6 +124,24 @@ impl Recorded {
         );
         markers.iter().map(|m| (0, head(m))).collect()
     }
+}
+
+/// Most entries of a folder looked through for packages.
+const MAX_ENTRIES: usize = 4096;
+
+/// True for a ROS package (an absolute folder holding a `package.xml`) or a folder of them.
+fn holds_ros_packages(p: &Path) -> bool {
+    let is_package = |d: &Path| d.join("package.xml").is_file();
+    if !p.is_absolute() || !p.is_dir() {
+        return false;
+    }
+    is_package(p)
+        || std::fs::read_dir(p).is_ok_and(|entries| {
+            entries
+                .take(MAX_ENTRIES)
+                .flatten()
+                .any(|e| is_package(&e.path()))
+        })
 }
 
 /// The part of a marker the renderer reads.

@@ -47,6 +47,9 @@ pub struct RecordOptions {
     /// `drape render` finds the robot's meshes and the scene's obstacles as the run did.
     pub scene_file: Option<PathBuf>,
     pub scene_name: Option<String>,
+    /// The folders the run searched for `package://` meshes besides the scene's own
+    /// (`--package-path`), also written to the metadata.
+    pub package_paths: Vec<PathBuf>,
 }
 
 impl Default for RecordOptions {
@@ -62,6 +65,7 @@ impl Default for RecordOptions {
             in_place: false,
             scene_file: None,
             scene_name: None,
+            package_paths: Vec::new(),
         }
     }
 }
@@ -382,14 +386,15 @@ fn run(
     Ok(s)
 }
 
-/// The bag's `drape` metadata: the scene (its file absolute) and the cloth pieces.
+/// The bag's `drape` metadata: the scene and the package folders (absolute), the cloth pieces.
 fn run_info(sim: &Simulation, opts: &RecordOptions) -> RunInfo {
+    let absolute = |p: &PathBuf| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| std::path::absolute(p).unwrap_or(p.clone()))
+    };
     RunInfo {
-        scene: opts.scene_file.as_ref().map(|f| {
-            std::fs::canonicalize(f)
-                .unwrap_or_else(|_| std::path::absolute(f).unwrap_or_else(|_| f.clone()))
-        }),
+        scene: opts.scene_file.as_ref().map(absolute),
         scene_name: opts.scene_name.clone(),
+        package_paths: opts.package_paths.iter().map(absolute).collect(),
         cloth_pieces: sim
             .cloth
             .pieces

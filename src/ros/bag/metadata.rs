@@ -5,6 +5,8 @@
 //! Keys (all optional; a bag from another recorder has none of them):
 //! - `scene`: the scene file, absolute;
 //! - `scene_name`: the scene's `name`;
+//! - `package_paths`: JSON list of the folders the run searched for `package://` meshes besides
+//!   the scene's own (`--package-path`), absolute;
 //! - `cloth_pieces`: JSON list of `[name, triangles]`, the cloths in the order their triangles
 //!   follow each other in every `/drape/mesh` marker.
 
@@ -25,6 +27,8 @@ pub struct RunInfo {
     pub scene: Option<PathBuf>,
     /// The scene's `name`.
     pub scene_name: Option<String>,
+    /// Folders searched for `package://` meshes besides the scene's own (absolute).
+    pub package_paths: Vec<PathBuf>,
     /// Each cloth's name and triangle count, in marker order.
     pub cloth_pieces: Vec<(String, usize)>,
 }
@@ -37,6 +41,10 @@ impl RunInfo {
         }
         if let Some(n) = &self.scene_name {
             m.insert("scene_name".into(), n.clone());
+        }
+        if !self.package_paths.is_empty() {
+            let list = serde_json::to_string(&self.package_paths).unwrap_or_default();
+            m.insert("package_paths".into(), list);
         }
         if !self.cloth_pieces.is_empty() {
             let list = serde_json::to_string(&self.cloth_pieces).unwrap_or_default();
@@ -55,6 +63,12 @@ impl RunInfo {
         RunInfo {
             scene: get("scene").map(PathBuf::from).filter(|p| p.is_absolute()),
             scene_name: get("scene_name").cloned(),
+            package_paths: get("package_paths")
+                .and_then(|v| serde_json::from_str::<Vec<PathBuf>>(v).ok())
+                .unwrap_or_default()
+                .into_iter()
+                .filter(|p| p.is_absolute())
+                .collect(),
             cloth_pieces: get("cloth_pieces")
                 .and_then(|v| serde_json::from_str(v).ok())
                 .unwrap_or_default(),
@@ -100,6 +114,7 @@ mod tests {
         let info = RunInfo {
             scene: Some(PathBuf::from("/scenes/cape.yaml")),
             scene_name: Some("cape".into()),
+            package_paths: vec![PathBuf::from("/ws/src")],
             cloth_pieces: vec![("a".into(), 8), ("b\t\"x\"".into(), 2)],
         };
         for (name, with) in [("with.mcap", true), ("without.mcap", false)] {
