@@ -144,21 +144,28 @@ enum Command {
         /// N frames evenly spread over each bag (a strip).
         #[arg(long)]
         frames: Option<usize>,
-        /// Tile size in pixels, WIDTHxHEIGHT.
-        #[arg(long, default_value = "320x320")]
-        size: String,
+        /// Tile size in pixels, WIDTHxHEIGHT (default: square, 320 a side, smaller when a
+        /// row of tiles would be wider than 960).
+        #[arg(long)]
+        size: Option<String>,
         /// Tiles per row.
         #[arg(long)]
         columns: Option<usize>,
-        /// Camera azimuth and elevation in degrees.
-        #[arg(long, default_value_t = -60.0, allow_hyphen_values = true)]
-        azimuth: f64,
+        /// Camera azimuth in degrees (default: of eight, the one showing the most cloth,
+        /// -60 unless another shows clearly more).
+        #[arg(long, allow_hyphen_values = true)]
+        azimuth: Option<f64>,
+        /// Camera elevation in degrees.
         #[arg(long, default_value_t = 22.0, allow_hyphen_values = true)]
         elevation: f64,
         /// Do not draw the robot.
         #[arg(long)]
         no_robot: bool,
-        /// Folder searched for the robot's `package://` meshes (repeatable).
+        /// Do not write the scene's name and the time on the tiles.
+        #[arg(long)]
+        no_label: bool,
+        /// Folder searched for the robot's `package://` meshes (repeatable), besides where
+        /// the recording found them and ROS_PACKAGE_PATH / AMENT_PREFIX_PATH.
         #[arg(long)]
         package_path: Vec<PathBuf>,
     },
@@ -306,18 +313,34 @@ fn run(cli: Cli) -> Result<()> {
             azimuth,
             elevation,
             no_robot,
+            no_label,
             package_path,
         } => {
             use drape::render::{render, Pick, RenderOptions};
-            let (w, h) = size
-                .split_once('x')
-                .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
-                .ok_or_else(|| anyhow::anyhow!("--size {size}: expected WIDTHxHEIGHT"))?;
             let pick = match (at.is_empty(), frames) {
                 (false, Some(_)) => anyhow::bail!("--at and --frames: pick one"),
                 (false, None) => Pick::Times(at),
                 (true, Some(n)) => Pick::Spread(n),
                 (true, None) => Pick::Last,
+            };
+            let (w, h) = match size {
+                Some(size) => size
+                    .split_once('x')
+                    .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+                    .ok_or_else(|| anyhow::anyhow!("--size {size}: expected WIDTHxHEIGHT"))?,
+                None => {
+                    let gif = out
+                        .extension()
+                        .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+                    let per_bag = match &pick {
+                        Pick::Times(t) if !gif => t.len(),
+                        Pick::Spread(n) if !gif => *n,
+                        _ => 1,
+                    };
+                    let per_row = columns.unwrap_or(if per_bag > 1 { per_bag } else { bags.len() });
+                    let side = RenderOptions::default_tile(per_row);
+                    (side, side)
+                }
             };
             let opts = RenderOptions {
                 width: w,
@@ -328,6 +351,7 @@ fn run(cli: Cli) -> Result<()> {
                 elevation,
                 robot: !no_robot,
                 package_paths: package_path,
+                label: !no_label,
             };
             render(&bags, &out, &opts)?;
             println!("wrote {}", out.display());
@@ -545,6 +569,9 @@ fn record(args: RecordArgs) -> Result<()> {
         distro,
         frame_id,
         wall_time_in_bag,
+        scene_file: Some(scene_path.clone()),
+        scene_name: Some(scene.name.clone()),
+        package_paths: scene.package_paths.clone(),
         ..RecordOptions::default()
     };
 

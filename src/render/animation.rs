@@ -3,9 +3,10 @@
 //! frames. Each bag is framed on its own over its picked frames (a first pass over them).
 
 use super::draw::{draw_frame, sheet};
-use super::frames::{Extent, Source};
+use super::frames::{Frame, Source};
 use super::marker::MarkerHead;
 use super::options::{Pick, RenderError, RenderOptions, WriteError};
+use super::view::{view_of, Extent, View};
 use crate::ros::bag::TopicIter;
 use std::path::PathBuf;
 
@@ -82,6 +83,9 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// Frames of each bag the GIF's azimuth is chosen on (about; spread over the drawn ones).
+const SAMPLE: usize = 6;
+
 /// Draws `bags` side by side as a looping GIF into `out` (all frames unless picked otherwise).
 pub(super) fn render_gif(
     bags: &[PathBuf],
@@ -105,17 +109,26 @@ pub(super) fn render_gif(
         .collect::<Result<Vec<_>, _>>()?;
     let chosen: Vec<Vec<usize>> = sources.iter().map(|s| s.chosen(&opts.pick)).collect();
     let n = chosen.iter().map(Vec::len).min().unwrap_or(0);
-    let mut framing = Vec::with_capacity(sources.len());
+    let mut framing: Vec<View> = Vec::with_capacity(sources.len());
     for (src, ch) in sources.iter().zip(&chosen) {
         let mut unique = ch.clone();
         unique.sort_unstable();
         unique.dedup();
+        // The camera frames every drawn frame; the azimuth is chosen on a sample of them.
+        let every = unique.len().div_ceil(SAMPLE).max(1);
         let mut e = Extent::new();
+        let mut sample: Vec<Frame> = Vec::new();
+        let mut seen = 0usize;
         src.markers(&unique, |_, t, m| {
-            e.add(&src.frame(t, &m)?);
+            let f = src.frame(t, &m)?;
+            e.add(&f);
+            if seen.is_multiple_of(every) {
+                sample.push(f);
+            }
+            seen += 1;
             Ok(())
         })?;
-        framing.push(e.sphere());
+        framing.push(view_of(e.sphere(), &sample, &opts));
     }
     if n == 0 {
         return Err(GifError::Write(WriteError::NoFrames));
@@ -153,7 +166,7 @@ pub(super) fn render_gif(
         for (b, cursor) in cursors.iter_mut().enumerate() {
             let (t, m) = cursor.get(chosen[b][i])?;
             let frame = sources[b].frame(t, &m)?;
-            row.push(vec![draw_frame(&frame, framing[b], &opts)]);
+            row.push(vec![draw_frame(&frame, &framing[b], &opts)]);
         }
         let img = sheet(&row, &row_opts);
         let mut frame = ::gif::Frame::from_rgb_speed(w, h, &img.rgb, 10);

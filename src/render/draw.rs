@@ -1,31 +1,32 @@
 //! One frame as one tile, and tiles laid out in one picture.
 
 use super::frames::Frame;
+use super::label::draw_label;
 use super::obstacles;
 use super::options::RenderOptions;
-use super::raster::{Camera, Image, Raster};
-use crate::Vec3;
+use super::raster::{Image, Raster};
+use super::view::View;
 
-/// Draws one frame as one tile, with a camera framing `bounds`.
-pub fn draw_frame(frame: &Frame, bounds: (Vec3, f64), o: &RenderOptions) -> Image {
-    let cam = Camera::framing(
-        bounds.0,
-        bounds.1,
-        o.azimuth.to_radians(),
-        o.elevation.to_radians(),
-        o.width,
-        o.height,
-    );
+/// Draws one frame as one tile seen as `view` says, labelled with the scene and the time
+/// unless `o.label` is off.
+pub fn draw_frame(frame: &Frame, view: &View, o: &RenderOptions) -> Image {
+    let cam = view.camera(o.elevation, o.width, o.height);
     let mut r = Raster::new(o.width, o.height, &cam);
     for &(point, normal) in &frame.planes {
-        r.draw(&cam, &obstacles::plane_square(point, normal, bounds));
+        r.draw(
+            &cam,
+            &obstacles::plane_square(point, normal, (view.center, view.radius)),
+        );
     }
     for m in &frame.meshes {
         r.draw(&cam, m);
     }
-    r.image
+    let mut img = r.image;
+    if o.label {
+        draw_label(&mut img, &frame.scene, frame.seconds);
+    }
+    img
 }
-
 /// All tiles in one picture, `columns` per row.
 pub fn sheet(tiles: &[Vec<Image>], o: &RenderOptions) -> Image {
     let flat: Vec<&Image> = tiles.iter().flatten().collect();

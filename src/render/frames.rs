@@ -5,6 +5,7 @@ use super::marker::MarkerHead;
 use super::obstacles;
 use super::options::{Pick, RenderError, RenderOptions, MAX_SHEET_PIXELS};
 use super::raster::Mesh;
+use super::recorded::Recorded;
 use super::shapes;
 use crate::ros::msg::{RosString, TFMessage};
 use crate::ros::read_topic;
@@ -12,14 +13,33 @@ use crate::{Pose, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// One frame of a bag: the cloth as a welded mesh, the robot's shapes and the scene's solid
-/// obstacles (`meshes`, which the camera frames), and the scene's planes as (point, normal).
+/// One frame of a bag: each cloth as a welded mesh in its colour, the robot's shapes and the
+/// scene's solid obstacles (`meshes`, which the camera frames), and the scene's planes as
+/// (point, normal).
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub time_ns: u64,
+    /// Seconds since the bag's first cloth frame.
+    pub seconds: f64,
+    /// The scene's name (or the bag's file name), written on the tile.
+    pub scene: String,
+    /// The first `cloths` of `meshes` are the cloths.
+    pub cloths: usize,
     pub meshes: Vec<Mesh>,
     pub planes: Vec<(Vec3, Vec3)>,
 }
+
+/// Colours of the cloths, in the order of the bag's cloth pieces: apart from the robot's
+/// blue-grey, the obstacles' green and the grey ground. The first cloth keeps the marker's
+/// own colour when it has one.
+pub const CLOTH_PALETTE: [[f64; 3]; 6] = [
+    [0.85, 0.35, 0.20],
+    [0.58, 0.32, 0.75],
+    [0.92, 0.74, 0.15],
+    [0.85, 0.25, 0.52],
+    [0.15, 0.68, 0.78],
+    [0.55, 0.38, 0.22],
+];
 
 /// A bag opened for drawing: its bytes, the times of its cloth frames, and the robot and the
 /// scene obstacles (small beside the cloth, read whole). Cloth markers are decoded only when
@@ -29,6 +49,9 @@ pub(super) struct Source {
     pub times: Vec<u64>,
     robot: Option<(shapes::RobotShapes, TfSeries)>,
     obstacles: Vec<(u64, MarkerHead)>,
+    scene: String,
+    /// Triangles of each cloth, in marker order (empty: the marker is one cloth).
+    pieces: Vec<usize>,
 }
 
 impl Source {
@@ -47,16 +70,20 @@ impl Source {
                 });
             }
         }
+        let recorded = Recorded::of(&bytes);
         let robot = if o.robot {
-            robot_of(bag, &o.package_paths)
+            robot_of(bag, &recorded, &o.package_paths)
         } else {
             None
         };
-        // A bag without scene obstacles has no such topic.
-        let obstacles = read_topic::<MarkerHead>(bag, "/drape/obstacles")
-            .map(|t| t.messages)
-            .unwrap_or_default();
+        // A bag without scene obstacles has no such topic: the scene it names may have some.
+        let obstacles = match read_topic::<MarkerHead>(bag, "/drape/obstacles") {
+            Ok(t) => t.messages,
+            Err(_) => recorded.static_obstacles(bag),
+        };
         Ok(Source {
+            scene: recorded.name(bag),
+            pieces: recorded.info.cloth_pieces.iter().map(|(_, n)| *n).collect(),
             bag: bytes,
             times,
             robot,
@@ -109,7 +136,8 @@ impl Source {
                 point: k,
             });
         }
-        let mut meshes = vec![cloth_mesh(m)];
+        let mut meshes = cloth_meshes(m, &self.pieces);
+        let cloths = meshes.len();
         if let Some((shapes, tf)) = &self.robot {
             let poses = tf_at(tf, t);
             meshes.extend(shapes.meshes(&poses));
@@ -118,6 +146,9 @@ impl Source {
         meshes.extend(o.meshes);
         Ok(Frame {
             time_ns: t,
+            seconds: t.saturating_sub(self.times[0]) as f64 * 1e-9,
+            scene: self.scene.clone(),
+            cloths,
             meshes,
             planes: o.planes,
         })
@@ -171,16 +202,42 @@ pub fn read_frames(bag: &Path, o: &RenderOptions) -> Result<Vec<Frame>, RenderEr
         .collect())
 }
 
-/// The marker's triangle soup welded by exact position (the recorder writes each vertex's
-/// coordinates identically in every triangle), with smooth normals.
-fn cloth_mesh(m: &MarkerHead) -> Mesh {
+/// The marker's triangle soup as one mesh per cloth (`pieces`: triangles of each, in order;
+/// ignored unless they add up to the marker's triangles), each in its palette colour and
+/// welded by exact position (the recorder writes each vertex's coordinates identically in
+/// every triangle), with smooth normals.
+fn cloth_meshes(m: &MarkerHead, pieces: &[usize]) -> Vec<Mesh> {
+    let triangles = m.points.len() / 3;
+    let whole = [triangles];
+    let counts = if pieces.iter().sum::<usize>() == triangles && !pieces.is_empty() {
+        pieces
+    } else {
+        &whole[..]
+    };
+    let own = [m.color.r, m.color.g, m.color.b].map(f64::from);
+    let mut out = Vec::with_capacity(counts.len());
+    let mut first = 0;
+    for (k, &n) in counts.iter().enumerate() {
+        let color = if k == 0 && own.iter().any(|c| *c > 0.0) {
+            own
+        } else {
+            CLOTH_PALETTE[k % CLOTH_PALETTE.len()]
+        };
+        out.push(weld(&m.points[3 * first..3 * (first + n)], color));
+        first += n;
+    }
+    out
+}
+
+/// A triangle soup welded by exact position, with smooth normals.
+fn weld(points: &[crate::ros::msg::Point], color: [f64; 3]) -> Mesh {
     let mut index: HashMap<[u64; 3], u32> = HashMap::new();
     let mut mesh = Mesh {
-        color: [m.color.r, m.color.g, m.color.b].map(f64::from),
+        color,
         ..Mesh::default()
     };
     let mut tri = [0u32; 3];
-    for (k, p) in m.points.iter().enumerate() {
+    for (k, p) in points.iter().enumerate() {
         let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
         let next = mesh.positions.len() as u32;
         let i = *index.entry(key).or_insert_with(|| {
@@ -192,20 +249,24 @@ fn cloth_mesh(m: &MarkerHead) -> Mesh {
             mesh.triangles.push(tri);
         }
     }
-    if mesh.color.iter().all(|c| *c <= 0.0) {
-        mesh.color = [0.85, 0.35, 0.2];
-    }
     mesh.smooth_normals();
     mesh
 }
 
 type TfSeries = Vec<(u64, TFMessage)>;
 
-/// The robot's shapes and its `/tf` messages, when the bag has a robot.
-fn robot_of(bag: &Path, package_paths: &[PathBuf]) -> Option<(shapes::RobotShapes, TfSeries)> {
+/// The robot's shapes and its `/tf` messages, when the bag has a robot; its meshes are looked
+/// for where the run found them (see [`Recorded::urdf_options`]), and those still missing are
+/// named in one warning while the rest is drawn.
+fn robot_of(
+    bag: &Path,
+    recorded: &Recorded,
+    package_paths: &[PathBuf],
+) -> Option<(shapes::RobotShapes, TfSeries)> {
     let desc = read_topic::<RosString>(bag, "/robot_description").ok()?;
     let urdf = &desc.messages.first()?.1.data;
-    let shapes = match shapes::RobotShapes::from_urdf(urdf, package_paths) {
+    let (dir, opts) = recorded.urdf_options(package_paths);
+    let shapes = match shapes::RobotShapes::from_urdf(urdf, dir.as_deref(), &opts) {
         Ok(s) => s,
         Err(e) => {
             let e = crate::input::error_line(&e);
@@ -213,6 +274,13 @@ fn robot_of(bag: &Path, package_paths: &[PathBuf]) -> Option<(shapes::RobotShape
             return None;
         }
     };
+    if !shapes.missing.is_empty() {
+        log::warn!(
+            "{}: robot meshes not found, drawn without them: {} (add --package-path)",
+            bag.display(),
+            shapes.missing.join(", ")
+        );
+    }
     let tf = read_topic::<TFMessage>(bag, "/tf").ok()?.messages;
     Some((shapes, tf))
 }
@@ -241,50 +309,4 @@ fn tf_at(tf: &TfSeries, t: u64) -> HashMap<String, Pose> {
         }
     }
     out
-}
-
-/// The box around the meshes of frames added one at a time (planes left out: unbounded).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Extent {
-    lo: Vec3,
-    hi: Vec3,
-}
-
-impl Extent {
-    pub fn new() -> Extent {
-        Extent {
-            lo: Vec3::splat(f64::INFINITY),
-            hi: Vec3::splat(f64::NEG_INFINITY),
-        }
-    }
-
-    pub fn add(&mut self, f: &Frame) {
-        for m in &f.meshes {
-            for p in &m.positions {
-                if p.is_finite() {
-                    self.lo = self.lo.min(*p);
-                    self.hi = self.hi.max(*p);
-                }
-            }
-        }
-    }
-
-    /// Centre and radius of the bounding sphere (a unit sphere at the origin when empty).
-    pub fn sphere(&self) -> (Vec3, f64) {
-        if !self.lo.is_finite() {
-            return (Vec3::ZERO, 1.0);
-        }
-        let c = (self.lo + self.hi) / 2.0;
-        (c, ((self.hi - self.lo).length() / 2.0).max(0.05))
-    }
-}
-
-/// Bounding sphere of the meshes of some frames (planes left out: unbounded): what each
-/// tile's camera frames.
-pub fn bounds(frames: &[Frame]) -> (Vec3, f64) {
-    let mut e = Extent::new();
-    for f in frames {
-        e.add(f);
-    }
-    e.sphere()
 }

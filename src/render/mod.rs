@@ -1,26 +1,38 @@
 //! `drape render`: pictures of recorded bags without ROS or Foxglove, for dataset thumbnails and
 //! the README.
 //!
-//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker), `/drape/obstacles` (the scene's
-//! own obstacles, one Marker each, when it has any; see [`obstacles`]) and, for robot scenes,
-//! `/robot_description` and `/tf`: the robot's collision shapes are drawn at the link poses of
-//! the frame. Planes are drawn as a square under what the tile frames. Each picked frame of each bag is one tile, shaded by the software rasteriser in
-//! [`raster`]; tiles are laid out in a grid (bags side by side by default, or the frames of one
-//! bag as a strip). A `.gif` output animates the frames instead.
+//! Reads `/drape/mesh` (the cloth, a TRIANGLE_LIST Marker; each cloth piece the bag's metadata
+//! lists in its own colour), `/drape/obstacles` (the scene's own obstacles, one Marker each, when
+//! it has any; see [`obstacles`]) and, for robot scenes, `/robot_description` and `/tf`: the
+//! robot's collision shapes are drawn at the link poses of the frame. The scene file the bag's
+//! metadata names is read again (see `recorded.rs`) to find the robot's meshes where the
+//! recording found them and to draw the scene's static obstacles a bag lacks. Planes are drawn as
+//! a square under what the tile frames. Each picked frame of each bag is one tile, shaded by the
+//! software rasteriser in [`raster`], seen from the side that shows the most cloth ([`view()`])
+//! and labelled with the scene's name and the time; tiles are laid out in a grid (bags side by
+//! side by default, or the frames of one bag as a strip). A `.gif` output animates the frames
+//! instead.
 
 mod animation;
 mod draw;
 mod frames;
+mod label;
 mod marker;
 pub mod obstacles;
 mod options;
 pub mod raster;
+mod recorded;
 mod shapes;
+mod view;
 
 pub use draw::{draw_frame, sheet};
-pub use frames::{bounds, read_frames, Frame};
-pub use options::{Pick, RenderError, RenderOptions, WriteError, MAX_SHEET_PIXELS};
+pub use frames::{read_frames, Frame, CLOTH_PALETTE};
+pub use options::{
+    Pick, RenderError, RenderOptions, WriteError, DEFAULT_SHEET_WIDTH, DEFAULT_TILE,
+    MAX_SHEET_PIXELS,
+};
 pub use raster::{Camera, Image, Mesh, Raster};
+pub use view::{bounds, view, View, DEFAULT_AZIMUTH};
 
 use std::path::{Path, PathBuf};
 
@@ -44,8 +56,8 @@ pub fn tiles(bags: &[PathBuf], o: &RenderOptions) -> Result<Vec<Vec<Image>>, Ren
                 height: o.height,
             });
         }
-        let b = bounds(&frames);
-        out.push(frames.iter().map(|f| draw_frame(f, b, o)).collect());
+        let v = view(&frames, o);
+        out.push(frames.iter().map(|f| draw_frame(f, &v, o)).collect());
     }
     Ok(out)
 }

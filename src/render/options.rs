@@ -30,26 +30,44 @@ pub struct RenderOptions {
     /// Tiles per row (default: the bags side by side when one frame is picked, else the frames
     /// of each bag in a row).
     pub columns: Option<usize>,
-    /// Camera azimuth and elevation (degrees).
-    pub azimuth: f64,
+    /// Camera azimuth (degrees; `None`: the one of a few that shows the most cloth, see
+    /// [`super::view`]) and elevation (degrees).
+    pub azimuth: Option<f64>,
     pub elevation: f64,
     /// Draw the robot's collision shapes when the bag has a robot.
     pub robot: bool,
-    /// Where `package://` meshes of the bag's robot are searched.
+    /// Where `package://` meshes of the bag's robot are searched, besides where the run found
+    /// them and the ROS environment.
     pub package_paths: Vec<PathBuf>,
+    /// Write the scene's name and the frame's time on each tile.
+    pub label: bool,
+}
+
+/// Widest a default picture grows (pixels): about a README's column.
+pub const DEFAULT_SHEET_WIDTH: usize = 960;
+/// Side of a default square tile when the row has room for it.
+pub const DEFAULT_TILE: usize = 320;
+
+impl RenderOptions {
+    /// The default square tile side for `per_row` tiles in a row: [`DEFAULT_TILE`], smaller
+    /// when the row would be wider than [`DEFAULT_SHEET_WIDTH`] (at least 96).
+    pub fn default_tile(per_row: usize) -> usize {
+        (DEFAULT_SHEET_WIDTH / per_row.max(1)).clamp(96, DEFAULT_TILE)
+    }
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
         Self {
-            width: 320,
-            height: 320,
+            width: DEFAULT_TILE,
+            height: DEFAULT_TILE,
             pick: Pick::Last,
             columns: None,
-            azimuth: -60.0,
+            azimuth: None,
             elevation: 22.0,
             robot: true,
             package_paths: Vec::new(),
+            label: true,
         }
     }
 }

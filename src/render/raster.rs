@@ -138,10 +138,14 @@ impl Mesh {
     }
 }
 
-/// Draws meshes into an image with a shared z-buffer.
+/// Draws meshes into an image with a shared z-buffer, and keeps which draw call each pixel
+/// shows (what the camera's choice of view counts).
 pub struct Raster {
     pub image: Image,
     depth: Vec<f64>,
+    /// Per pixel: 0 for background, else `k` for the `k`-th [`Raster::draw`] call.
+    owner: Vec<u32>,
+    draws: u32,
     light: Vec3,
 }
 
@@ -152,11 +156,19 @@ impl Raster {
         Raster {
             image: Image::background(width, height),
             depth: vec![f64::INFINITY; width * height],
+            owner: vec![0; width * height],
+            draws: 0,
             light,
         }
     }
 
+    /// Per pixel, which draw call it shows: 0 for none, `k` for the `k`-th.
+    pub fn owners(&self) -> &[u32] {
+        &self.owner
+    }
+
     pub fn draw(&mut self, camera: &Camera, mesh: &Mesh) {
+        self.draws += 1;
         let projected: Vec<Option<(f64, f64, f64)>> =
             mesh.positions.iter().map(|&p| camera.project(p)).collect();
         let (w, h) = (self.image.width as i64, self.image.height as i64);
@@ -225,6 +237,7 @@ impl Raster {
                         continue;
                     }
                     self.depth[k] = z;
+                    self.owner[k] = self.draws;
                     let pos = world[0] * w0 + world[1] * w1 + world[2] * w2;
                     let mut n =
                         (normals[0] * w0 + normals[1] * w1 + normals[2] * w2).normalize_or(Vec3::Z);

@@ -5,28 +5,28 @@ use crate::robot::{Geometry, Robot, RobotError, UrdfOptions};
 use crate::{Pose, Vec3};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
-use std::path::PathBuf;
+use std::path::Path;
 
 /// Shapes per link, in link coordinates.
 #[derive(Debug, Clone)]
 pub struct RobotShapes {
     /// (link name, shape mesh in the link frame), the root link's under its own name.
     links: Vec<(String, Mesh)>,
+    /// Mesh URIs not found (their shapes are left out).
+    pub missing: Vec<String>,
 }
 
 const ROBOT_COLOR: [f64; 3] = [0.45, 0.55, 0.68];
 
 impl RobotShapes {
-    /// From URDF text (`/robot_description`); `package://` and relative meshes are searched in
-    /// `search_paths`.
-    pub fn from_urdf(urdf: &str, search_paths: &[PathBuf]) -> Result<RobotShapes, RobotError> {
-        let opts = UrdfOptions {
-            search_paths: search_paths.to_vec(),
-            ..UrdfOptions::default()
-        };
-        // The first search path also stands for the URDF's own folder (relative mesh paths).
-        let base = search_paths.first().map(PathBuf::as_path);
-        let robot = Robot::from_urdf_str(urdf, base, &opts)?;
+    /// From URDF text (`/robot_description`); relative meshes are resolved against `dir` (the
+    /// URDF's folder), `package://` ones as `opts` says (see [`crate::robot::resolve`]).
+    pub fn from_urdf(
+        urdf: &str,
+        dir: Option<&Path>,
+        opts: &UrdfOptions,
+    ) -> Result<RobotShapes, RobotError> {
+        let robot = Robot::from_urdf_str(urdf, dir, opts)?;
         let names = robot.link_names().to_vec();
         let mut links = Vec::new();
         for (l, shapes) in robot.collision_shapes().iter().enumerate() {
@@ -42,7 +42,13 @@ impl RobotShapes {
                 }
             }
         }
-        Ok(RobotShapes { links })
+        let mut missing: Vec<String> = Vec::new();
+        for uri in robot.missing_meshes() {
+            if !missing.contains(uri) {
+                missing.push(uri.clone());
+            }
+        }
+        Ok(RobotShapes { links, missing })
     }
 
     /// The shapes at the link poses (root frame); links without a pose are at the origin

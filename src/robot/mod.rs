@@ -46,6 +46,9 @@ pub struct Robot {
     collision: Vec<Vec<(Pose, Geometry)>>,
     /// Per link: where its shapes came from, or why it has none (what `drape check` shows).
     sources: Vec<ShapeSource>,
+    /// Mesh URIs left out because no file was found (only with
+    /// [`UrdfOptions::skip_missing_meshes`]).
+    missing_meshes: Vec<String>,
 }
 
 /// Where a link's collision shapes came from, or why the link is not an obstacle.
@@ -74,6 +77,11 @@ impl Robot {
     /// Per link (indexed like [`Kinematics::links`]): where its shapes came from.
     pub fn shape_sources(&self) -> &[ShapeSource] {
         &self.sources
+    }
+
+    /// Mesh URIs left out because no file was found (see [`UrdfOptions::skip_missing_meshes`]).
+    pub fn missing_meshes(&self) -> &[String] {
+        &self.missing_meshes
     }
 
     pub fn link_names(&self) -> &[String] {

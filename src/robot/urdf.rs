@@ -23,6 +23,9 @@ pub struct UrdfOptions {
     /// Folders meshes may also come from besides the URDF's package tree and the search paths
     /// (the scene's folder and its `mesh_paths`); see [`super::resolve`].
     pub mesh_roots: Vec<PathBuf>,
+    /// Leave out a mesh that is not found instead of failing (listed in
+    /// [`Robot::missing_meshes`]): for drawing a recorded robot, where the rest still helps.
+    pub skip_missing_meshes: bool,
 }
 
 impl Default for UrdfOptions {
@@ -32,6 +35,7 @@ impl Default for UrdfOptions {
             search_paths: Vec::new(),
             use_ros_env: true,
             mesh_roots: Vec::new(),
+            skip_missing_meshes: false,
         }
     }
 }
@@ -320,6 +324,7 @@ fn build(
         }
     };
     let mut cache: HashMap<(PathBuf, [u64; 3]), Arc<TriMeshData>> = HashMap::new();
+    let mut missing_meshes = Vec::new();
     let mut collision = Vec::with_capacity(urdf.links.len());
     let mut sources = Vec::with_capacity(urdf.links.len());
     for link in &urdf.links {
@@ -350,8 +355,13 @@ fn build(
                     link: link.name.clone(),
                 });
             }
-            let geometry = convert_geometry(&link.name, g, dir, &search, options, &mut cache)?;
-            shapes.push((pose, geometry));
+            match convert_geometry(&link.name, g, dir, &search, options, &mut cache) {
+                Ok(geometry) => shapes.push((pose, geometry)),
+                Err(RobotError::MeshNotFound { uri, .. }) if options.skip_missing_meshes => {
+                    missing_meshes.push(uri);
+                }
+                Err(e) => return Err(e),
+            }
         }
         collision.push(shapes);
     }
@@ -360,6 +370,7 @@ fn build(
         kinematics,
         collision,
         sources,
+        missing_meshes,
     })
 }
 

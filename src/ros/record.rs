@@ -15,8 +15,8 @@ use crate::ros::msg::{
 use crate::ros::obstacles;
 use crate::ros::telemetry::{FrameQuality, RunQuality, RunSummary};
 use crate::ros::{
-    mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro, Durability,
-    Reliability, TopicId,
+    bag::RunInfo, mesh_marker, offered_qos_profiles, point_cloud, BagError, BagWriter, Distro,
+    Durability, Reliability, TopicId,
 };
 use crate::sim::{DivergenceError, Simulation};
 use std::path::{Path, PathBuf};
@@ -42,6 +42,14 @@ pub struct RecordOptions {
     /// caller that already writes to a staging name of its own and renames it (a sweep job's
     /// `.part`), so a killed job leaves exactly that one partial file for its rerun to remove.
     pub in_place: bool,
+    /// The scene file the run was built from and the scene's name: written (the file made
+    /// absolute) with the cloth pieces to the bag's `drape` metadata ([`RunInfo`]), so that
+    /// `drape render` finds the robot's meshes and the scene's obstacles as the run did.
+    pub scene_file: Option<PathBuf>,
+    pub scene_name: Option<String>,
+    /// The folders the run searched for `package://` meshes besides the scene's own
+    /// (`--package-path`), also written to the metadata.
+    pub package_paths: Vec<PathBuf>,
 }
 
 impl Default for RecordOptions {
@@ -55,6 +63,9 @@ impl Default for RecordOptions {
             color: [0.85, 0.35, 0.2, 1.0],
             wall_time_in_bag: false,
             in_place: false,
+            scene_file: None,
+            scene_name: None,
+            package_paths: Vec::new(),
         }
     }
 }
@@ -261,6 +272,7 @@ fn record_into(
     stop: &AtomicBool,
     progress: &mut impl FnMut(f64),
 ) -> Result<RecordSummary, RecordError> {
+    bag.write_run_info(&run_info(sim, opts))?;
     let mut topics = Topics {
         mesh: bag.add_topic::<Marker>(&format!("{}/mesh", opts.topic_prefix), opts.distro, None)?,
         points: bag.add_topic::<PointCloud2>(
@@ -372,6 +384,24 @@ fn run(
     s.simulated_seconds = sim.time();
     s.wall_seconds = started.elapsed().as_secs_f64();
     Ok(s)
+}
+
+/// The bag's `drape` metadata: the scene and the package folders (absolute), the cloth pieces.
+fn run_info(sim: &Simulation, opts: &RecordOptions) -> RunInfo {
+    let absolute = |p: &PathBuf| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| std::path::absolute(p).unwrap_or(p.clone()))
+    };
+    RunInfo {
+        scene: opts.scene_file.as_ref().map(absolute),
+        scene_name: opts.scene_name.clone(),
+        package_paths: opts.package_paths.iter().map(absolute).collect(),
+        cloth_pieces: sim
+            .cloth
+            .pieces
+            .iter()
+            .map(|p| (p.name.clone(), p.triangle_count))
+            .collect(),
+    }
 }
 
 /// Refuses a frame with a NaN or infinite value: cloth positions, joint positions, link poses.

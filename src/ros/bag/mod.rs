@@ -3,9 +3,11 @@
 
 mod error;
 pub mod lengths;
+mod metadata;
 mod read;
 mod write;
 
 pub use error::BagError;
+pub use metadata::RunInfo;
 pub use read::{read_joint_states, read_topic, BagBytes, TopicIter, TopicRead};
 pub use write::{BagWriter, TopicId};

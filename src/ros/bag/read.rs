@@ -53,6 +53,10 @@ impl BagBytes {
         &self.path
     }
 
+    pub(super) fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
     /// The messages on `topic`, decoded one at a time as the iterator is advanced (nothing is
     /// collected), in file order.
     pub fn topic<M: RosMessage + DeserializeOwned>(

@@ -200,6 +200,25 @@ impl BagWriter {
             })
     }
 
+    /// Writes a metadata record `name` (key/value strings), e.g. [`super::RunInfo`].
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        metadata: BTreeMap<String, String>,
+    ) -> Result<(), BagError> {
+        let writer = self.writer.as_mut().expect("writer present until finish");
+        let record = mcap::records::Metadata {
+            name: name.to_string(),
+            metadata,
+        };
+        writer
+            .write_metadata(&record)
+            .map_err(|source| BagError::Mcap {
+                path: self.path.clone(),
+                source,
+            })
+    }
+
     /// Closes the current chunk and pushes it to the OS, so a crash loses at most
     /// what was written after this call (the file then lacks its summary; readers
     /// that scan, like [`super::read_topic`], still recover the messages).
