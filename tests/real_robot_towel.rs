@@ -1,8 +1,12 @@
-//! A real robot swinging a towel at its joints' velocity limits: the Franka Panda from
-//! `pybullet_data` (its OBJ collision meshes as they ship), a 0.3 m towel (24x24) held 14 cm
-//! out from the hand, the arm driven through waypoints each reached at the fastest joint's URDF
-//! velocity limit, as a user would script a whip. The elbow folds onto the held corner on the
-//! way: a held vertex sits inside the elbow's contact layer, the free vertex beside it does not.
+//! Real robots swinging towels at their joints' velocity limits, robots from `pybullet_data`
+//! with their collision meshes as they ship:
+//! - the Franka Panda, a 0.3 m towel (24x24) held 14 cm out from the hand, the arm driven
+//!   through waypoints each reached at the fastest joint's URDF velocity limit, as a user would
+//!   script a whip. The elbow folds onto the held corner on the way: a held vertex sits inside
+//!   the elbow's contact layer, the free vertex beside it does not;
+//! - the KUKA iiwa, a 0.4 m towel (30x30) held by a corner 7 cm past the flange, the base joint
+//!   swung between +-1.2 rad at 9.3 rad/s (93 % of its limit) with the arm bent forward, so that
+//!   the towel whips around the flange and the wrist.
 //!
 //! Judged at every frame end of the full run, with self-collision off and on: the step never
 //! fails, every position is finite, held vertices are on their targets, no cloth vertex is
@@ -14,7 +18,6 @@
 mod self_check;
 
 use drape::scene::Scene;
-use parry3d::query::PointQuery;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -33,8 +36,60 @@ fn pybullet_data() -> PathBuf {
     PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
 }
 
-/// The scene, with the Panda's URDF named by its absolute path.
-fn scene(self_collision: bool) -> Scene {
+/// Loads a scene text written to a temporary file (the URDF named by its absolute path).
+fn load(text: &str, name: &str) -> Scene {
+    let dir = std::env::temp_dir().join(format!("drape_real_robot_{}_{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join(format!("{name}.yaml"));
+    std::fs::write(&path, text).expect("scene written");
+    let scene = Scene::load(&path);
+    let _ = std::fs::remove_dir_all(&dir);
+    scene.expect("the scene loads")
+}
+
+/// The iiwa's whip: joint 1 between +-1.2 rad at 9.3 rad/s, held 0.15 s at each end.
+fn kuka(self_collision: bool) -> Scene {
+    let urdf = pybullet_data()
+        .join("kuka_iiwa/model.urdf")
+        .display()
+        .to_string();
+    let mut points = String::from(
+        "      - { t: 0.0, positions: [0.0, 1.0, -1.0] }\n      - { t: 0.3, positions: [0.0, 1.0, -1.0] }\n",
+    );
+    let (mut t, mut q) = (0.3, 0.0f64);
+    for k in 0..8 {
+        let next = if k % 2 == 0 { 1.2 } else { -1.2 };
+        t += (next - q).abs() / 9.3;
+        q = next;
+        points += &format!("      - {{ t: {t:.4}, positions: [{q}, 1.0, -1.0] }}\n");
+        t += 0.15;
+        points += &format!("      - {{ t: {t:.4}, positions: [{q}, 1.0, -1.0] }}\n");
+    }
+    let text = format!(
+        r#"
+name: kuka_whip
+duration: 3.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.016666666666666666, substeps: 2 }}
+cloths:
+  - name: towel
+    grid: {{ size: [0.4, 0.4], resolution: [30, 30], pose: {{ xyz: [1.054, 0.0, 0.158], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
+    material: {{ density: 0.25, stretch: 1500.0, shear: 150.0, bend_warp: 1.0e-4, bend_weft: 1.0e-4, damping: {{ spring: 0.05, air: 0.1 }}, thickness: 0.004, friction: 0.4 }}
+robot:
+  urdf: {urdf}
+  trajectory:
+    names: [lbr_iiwa_joint_1, lbr_iiwa_joint_2, lbr_iiwa_joint_4]
+    points:
+{points}  attach:
+    - {{ cloth: towel, link: lbr_iiwa_link_7, near: {{ point: [0, 0, 0.07], radius: 0.02 }} }}
+collision: {{ mode: continuous, self_collision: {self_collision} }}
+"#
+    );
+    load(&text, &format!("kuka_{self_collision}"))
+}
+
+/// The Panda's whip.
+fn panda(self_collision: bool) -> Scene {
     let urdf = pybullet_data()
         .join("franka_panda/panda.urdf")
         .display()
@@ -74,13 +129,7 @@ robot:
 collision: {{ mode: continuous, self_collision: {self_collision} }}
 "#
     );
-    let dir = std::env::temp_dir().join(format!("drape_panda_whip_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("whip_{self_collision}.yaml"));
-    std::fs::write(&path, text).expect("scene written");
-    let scene = Scene::load(&path);
-    let _ = std::fs::remove_dir_all(&dir);
-    scene.expect("the scene loads")
+    load(&text, &format!("panda_{self_collision}"))
 }
 
 /// The deepest cloth vertex inside any link (m; 0 when none is inside).
@@ -104,8 +153,8 @@ fn deepest_inside(sim: &drape::sim::Simulation) -> (f64, String) {
     worst
 }
 
-fn whip(self_collision: bool) {
-    let scene = scene(self_collision);
+fn whip(scene: Scene) {
+    let self_collision = scene.collision.self_collision;
     let (mut sim, mut driver) = scene.build_with_robot().expect("the scene builds");
     let thickness = 0.004;
     let frames = (scene.duration / sim.settings.dt).round() as usize;
@@ -116,7 +165,10 @@ fn whip(self_collision: bool) {
         }
         let t = sim.time();
         if let Err(e) = sim.step() {
-            panic!("self-collision {self_collision}: the step after t = {t:.4} s failed: {e}");
+            panic!(
+                "{}, self-collision {self_collision}: the step after t = {t:.4} s failed: {e}",
+                scene.name
+            );
         }
         let t = sim.time();
         assert!(
@@ -144,7 +196,7 @@ fn whip(self_collision: bool) {
 
 #[test]
 fn panda_whips_a_towel_at_its_velocity_limits() {
-    whip(false);
+    whip(panda(false));
 }
 
 #[test]
@@ -152,5 +204,15 @@ fn panda_whips_a_towel_at_its_velocity_limits() {
             corner passes within its contact layer, and stretches until the guard stops it \
             (docs/guide/collision.md, known limits)"]
 fn panda_whips_a_self_colliding_towel_at_its_velocity_limits() {
-    whip(true);
+    whip(panda(true));
+}
+
+#[test]
+fn kuka_whips_a_towel_around_its_flange() {
+    whip(kuka(false));
+}
+
+#[test]
+fn kuka_whips_a_self_colliding_towel_around_its_flange() {
+    whip(kuka(true));
 }

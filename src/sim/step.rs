@@ -19,8 +19,9 @@
 //! 7. coupling out: what the solver did becomes the collision stage's feedback;
 //! 8. collisions fix the new state; metrics are recorded;
 //! 9. the guard checks the state the substep ends in: an edge the collision response stretched
-//!    beyond the strain bound, or a vertex it moved more than fast contact allows, rolls the
-//!    whole substep back to be split (see [`super::guard`]).
+//!    beyond the strain bound, a vertex it moved more than fast contact allows, or cloth-cloth
+//!    pairs the self-contact fail-safe gave up on, rolls the whole substep back to be split (see
+//!    [`super::guard`]).
 //!
 //! The guard's energy pass at the new state also computes the position-only forces there, which
 //! the next substep's first force evaluation reuses (see [`EffectSet::energy_split`]), so a

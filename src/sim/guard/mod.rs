@@ -79,6 +79,9 @@ pub(super) struct Guard {
     watching: bool,
     /// Cloth-cloth pairs the last collision pass left unresolved.
     unresolved: usize,
+    /// The last kept substep ended tangled: halving cannot undo a tangle the substep starts in,
+    /// so only a new one is redone in halves.
+    tangled: bool,
     /// Fast-contact splitting and the strain check switched off (for the cost comparison of
     /// `benches/fast_links.rs`).
     contact_checks_off: bool,
@@ -251,8 +254,10 @@ impl Guard {
     /// watched it: an edge the collision response stretched beyond the strain bound rejects the
     /// substep (at the guard's deepest level, with the subdivide policy, the response cannot do
     /// better and the state is kept: its stretch is on `/diagnostics`); a vertex the response
-    /// moved more than fast contact allows splits it. Either rolls the whole substep back to its
-    /// start (`x0`, `v0`, the saved stage and bookkeeping).
+    /// moved more than fast contact allows splits it, and so do cloth-cloth pairs the
+    /// self-contact fail-safe gave up on in a substep that started untangled, while the guard
+    /// may split. Each rolls the whole
+    /// substep back to its start (`x0`, `v0`, the saved stage and bookkeeping).
     #[allow(clippy::too_many_arguments)]
     pub fn check_response(
         &mut self,
@@ -265,6 +270,7 @@ impl Guard {
         m: &mut StepMetrics,
     ) -> Verdict {
         let Some(stage) = stage.filter(|_| self.watching) else {
+            self.tangled = self.unresolved > 0;
             return Ok(());
         };
         let mut redo = None;
@@ -282,10 +288,11 @@ impl Guard {
         }
         // A tangle the fail-safe gave up on is redone in halves while the guard may split; past
         // that it stands, counted in `unresolved_contacts` (a WARN on `/diagnostics`).
-        if redo.is_none() && self.unresolved > 0 && span.depth < g.split_levels() {
+        if redo.is_none() && self.unresolved > 0 && !self.tangled && span.depth < g.split_levels() {
             redo = Some(Redo::Split(Why::Tangle));
         }
         let Some(redo) = redo else {
+            self.tangled = self.unresolved > 0;
             return Ok(());
         };
         // The rolled-back pass's tangle is not the state the step keeps.
