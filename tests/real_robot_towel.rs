@@ -194,6 +194,25 @@ fn whip(scene: Scene) {
     }
 }
 
+/// The README's example scene, as a user copies it from there.
+#[test]
+fn the_readme_panda_example_runs() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README");
+    let after = readme
+        .split("`panda_towel.yaml`:\n\n```yaml\n")
+        .nth(1)
+        .expect("the README shows panda_towel.yaml");
+    let yaml = after.split("```").next().expect("a closed block");
+    let urdf = pybullet_data()
+        .join("franka_panda/panda.urdf")
+        .display()
+        .to_string();
+    let text = yaml.replacen("urdf: franka_panda/panda.urdf", &format!("urdf: {urdf}"), 1);
+    assert_ne!(text, yaml, "the example names franka_panda/panda.urdf");
+    whip(load(&text, "readme"));
+}
+
 #[test]
 fn panda_whips_a_towel_at_its_velocity_limits() {
     whip(panda(false));
