@@ -1,4 +1,4 @@
-//! `drape record --scene config/shirt.yaml`: the bag carries the welded shirt from the first frame
+//! `drape record config/shirt.yaml`: the bag carries the welded shirt from the first frame
 //! on (dressing happens while the scene is built), with a constant vertex count equal to the
 //! welded garment's, whose connectivity `garment_shirt` checks (one manifold component).
 #![cfg(feature = "ros")]

@@ -11,7 +11,7 @@ trap 'rm -rf "$bags"' EXIT
 for scene in config/*.yaml; do
   name=$(basename "$scene" .yaml)
   [ "$name" = node ] && continue
-  "$drape" record --quiet --scene "$scene" --out "$bags/$name.mcap" >/dev/null
+  "$drape" record --quiet "$scene" --out "$bags/$name.mcap" >/dev/null
 done
 # The four materials side by side at four times: one view for all, small tiles.
 "$drape" render "$bags"/three_corner_{normal,soft_stretch,soft_bending,soft_warp}.mcap \
