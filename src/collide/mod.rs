@@ -12,7 +12,7 @@
 //! (geometry and the mesh's 1-ring).
 
 mod arrival;
-mod broad;
+pub(crate) mod broad;
 mod contact;
 mod error;
 mod exit;

@@ -66,6 +66,15 @@ pub enum GarmentError {
         triangle: usize,
         edge_length: f64,
     },
+    #[error("garment '{garment}': sewn through itself: {pairs} pairs of triangles cross after welding, the first (triangles {triangles:?}, at {at:?} m) {}", crossing_place(.seam))]
+    WeldedCrossing {
+        garment: String,
+        /// The seam nearest the first crossing, if within a few edge lengths of it.
+        seam: Option<String>,
+        pairs: usize,
+        triangles: (u32, u32),
+        at: [f32; 3],
+    },
     #[error("panel '{panel}': outline {problem}")]
     Outline {
         panel: String,
@@ -180,6 +189,7 @@ impl GarmentError {
             | AttachLink { garment, .. }
             | AttachSelectsNothing { garment, .. }
             | WeldCollapse { garment, .. }
+            | WeldedCrossing { garment, .. }
             | NotResampled { garment, .. }
             | Mesh { garment, .. }
             | SeamOpen { garment, .. } => Some(garment),
@@ -255,6 +265,8 @@ impl GarmentError {
             SeamLength { seam: s, .. }
             | NotResampled { seam: s, .. }
             | SeamOpen { seam: s, .. } => whole_seam(s),
+            WeldedCrossing { seam: Some(s), .. } => whole_seam(s),
+            WeldedCrossing { seam: None, .. } => "panels".into(),
             SewingDiverged { .. } | Cancelled { .. } | Stage { .. } => String::new(),
         }
     }
@@ -329,5 +341,15 @@ impl std::fmt::Display for SharedStageError {
 impl std::error::Error for SharedStageError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         self.0.source()
+    }
+}
+
+/// Where a welded garment's first crossing is, in words, for [`GarmentError::WeldedCrossing`].
+fn crossing_place(seam: &Option<String>) -> String {
+    match seam {
+        Some(s) => format!(
+            "is at seam '{s}': check its sides' order (`reversed`) and the panels' placement"
+        ),
+        None => "is away from every seam: the panels are placed crossing each other".into(),
     }
 }

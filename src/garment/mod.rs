@@ -10,6 +10,7 @@
 //! Dressing happens while a scene is built, with the robot in its t = 0 pose, so a recording or
 //! the live node only ever sees the welded garments.
 
+mod crossing;
 pub mod error;
 pub mod mesh;
 pub mod pattern;

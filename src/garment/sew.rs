@@ -1,13 +1,14 @@
 //! The sewing stage: panels placed around the body, seam springs closing along the schedule with
 //! gravity and wind off and collisions on, then the weld and the switch to normal simulation.
 
+use super::crossing::{crossings, nearest_seam};
 use super::error::{GarmentError, Length, MeshProblem, SharedStageError};
 use super::mesh::mesh_garment;
 use super::pattern;
 use super::placement::place;
 use super::seam::{gaps, SeamPairs, SeamSprings};
 use super::spec::{GarmentAttachSpec, GarmentSpec};
-use super::weld::{weld, Topology};
+use super::weld::{weld, Topology, Welded};
 use crate::cloth::{Cloth, Panel};
 use crate::effects::EffectPlan;
 use crate::robot::RobotDriver;
@@ -238,6 +239,7 @@ pub fn dress(
                 edge_length: g.edge_length,
             });
         }
+        refuse_crossings(g, &welded)?;
         log::info!(
             "garment '{}': sewn in {time:.2} s ({steps} steps), largest gap {}, {} -> {} vertices",
             g.name,
@@ -386,33 +388,32 @@ pub fn body_penetration(sim: &Simulation) -> f64 {
     deepest
 }
 
-/// Intersecting pairs of triangles that share no vertex (exact, brute force with box culling).
+/// Intersecting pairs of triangles that share no vertex (exact).
 pub fn self_intersections(x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
-    let boxes: Vec<(Vec3, Vec3)> = triangles
-        .iter()
-        .map(|t| {
-            let p = t.map(|i| x[i as usize]);
-            (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
-        })
-        .collect();
-    let mut count = 0;
-    for i in 0..triangles.len() {
-        for j in i + 1..triangles.len() {
-            if triangles[i].iter().any(|v| triangles[j].contains(v)) {
-                continue;
-            }
-            let (a, b) = (boxes[i], boxes[j]);
-            if a.0.cmpgt(b.1).any() || b.0.cmpgt(a.1).any() {
-                continue;
-            }
-            let (ti, tj) = (
-                triangles[i].map(|k| x[k as usize]),
-                triangles[j].map(|k| x[k as usize]),
-            );
-            if crate::collide::narrow::triangles_intersect(ti, tj) {
-                count += 1;
-            }
-        }
-    }
-    count
+    crossings(x, triangles).len()
+}
+
+/// Fails when the welded garment crosses itself, naming the seam nearest the first crossing
+/// (within three edge lengths of it) or saying that no seam is near.
+fn refuse_crossings(g: &GarmentSpec, welded: &Welded) -> Result<(), GarmentError> {
+    let x = &welded.cloth.x;
+    let found = crossings(x, &welded.cloth.triangles);
+    let Some(&(a, b)) = found.first() else {
+        return Ok(());
+    };
+    let centre = |t: u32| {
+        let t = welded.cloth.triangles[t as usize];
+        (x[t[0] as usize] + x[t[1] as usize] + x[t[2] as usize]) / 3.0
+    };
+    let at = (centre(a) + centre(b)) / 2.0;
+    let seam = nearest_seam(x, &welded.seams, at)
+        .filter(|(_, d)| *d <= 3.0 * g.edge_length)
+        .map(|(name, _)| name.to_string());
+    Err(GarmentError::WeldedCrossing {
+        garment: g.name.clone(),
+        seam,
+        pairs: found.len(),
+        triangles: (a, b),
+        at: at.as_vec3().to_array(),
+    })
 }
