@@ -207,6 +207,9 @@ struct HardCasesArgs {
     /// Output Markdown file, e.g. docs/hard_cases.md.
     #[arg(long)]
     out: PathBuf,
+    /// Run only the cases whose name contains this text (e.g. `real_`).
+    #[arg(long, value_name = "TEXT")]
+    only: Option<String>,
 }
 
 fn main() {
@@ -293,7 +296,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::HardCases(a)
         | Command::Dev {
             command: DevCommand::HardCases(a),
-        } => hard_cases(a.full, a.out),
+        } => hard_cases(a.full, a.out, a.only),
         #[cfg(feature = "ros")]
         Command::Node {
             params,
@@ -436,7 +439,7 @@ fn check(path: &std::path::Path, links: bool, package_paths: Vec<PathBuf>) -> Re
 
 /// Runs every hard case, writes the summary, and fails if any case failed its criteria.
 #[cfg(feature = "tools")]
-fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
+fn hard_cases(full: bool, out: PathBuf, only: Option<String>) -> Result<()> {
     use drape::hard::{catalogue, markdown, run_case, Resolution};
     let res = if full {
         Resolution::Full
@@ -444,7 +447,10 @@ fn hard_cases(full: bool, out: PathBuf) -> Result<()> {
         Resolution::Ci
     };
     let mut outcomes = Vec::new();
-    for (name, build) in catalogue() {
+    let chosen = catalogue()
+        .into_iter()
+        .filter(|(name, _)| only.as_deref().is_none_or(|o| name.contains(o)));
+    for (name, build) in chosen {
         let o = run_case(build(res)?);
         log::info!(
             "{name}: {} in {:.1} s{}",

@@ -13,7 +13,13 @@ use super::hanging::{
     stiff_implicit, tiny_cloth,
 };
 use super::motion::{crumple, impact, pinch, robot_swing};
-use super::self_contact::{cape_swinging, sleeve_worn, towel_picked, towel_shaken};
+use super::real_robots::{
+    kuka_self_towel_whip, kuka_towel_whip, panda_self_towel_pick, panda_self_towel_whip,
+    panda_towel_whip, xarm_self_towel_whip, xarm_self_wipe, xarm_towel_whip,
+};
+use super::self_contact::{
+    cape_swinging, shirt_cut_long_worn, sleeve_worn, towel_picked, towel_shaken,
+};
 use super::{Case, HardError, Resolution};
 
 /// Builds one case at a resolution.
@@ -44,5 +50,14 @@ pub fn catalogue() -> Vec<(&'static str, CaseFn)> {
         ("self_cape_under_swinging_arms", cape_swinging),
         ("self_sleeve_sewn_and_worn", sleeve_worn),
         ("self_towel_picked_from_table", towel_picked),
+        ("self_shirt_of_another_cut_worn", shirt_cut_long_worn),
+        ("real_panda_towel_whip", panda_towel_whip),
+        ("real_panda_self_towel_whip", panda_self_towel_whip),
+        ("real_kuka_towel_whip", kuka_towel_whip),
+        ("real_kuka_self_towel_whip", kuka_self_towel_whip),
+        ("real_xarm6_towel_whip", xarm_towel_whip),
+        ("real_xarm6_self_towel_whip", xarm_self_towel_whip),
+        ("real_xarm6_self_wipe_table", xarm_self_wipe),
+        ("real_panda_self_towel_pick", panda_self_towel_pick),
     ]
 }

@@ -8,6 +8,7 @@ mod edge;
 mod fast_links;
 mod hanging;
 mod motion;
+mod real_robots;
 mod report;
 mod runner;
 mod self_contact;
@@ -55,6 +56,10 @@ pub struct Criteria {
     /// Largest edge length over its rest length at any frame end (a bound the case derives
     /// from its material and speeds, e.g. `1 + v / c` for an impact at `v`).
     pub max_stretch: Option<f64>,
+    /// Depth of the deepest cloth vertex inside an obstacle's solid at a frame end (m), by parry's
+    /// point projection: independent of the contact stage, which has no inside test for mesh
+    /// links.
+    pub max_inside_solid: Option<f64>,
     /// Intersecting non-adjacent triangle pairs at the end of any step.
     pub max_self_intersections: Option<usize>,
     /// Distance of a pinned/attached vertex from its target after a step (m).
@@ -79,6 +84,7 @@ impl Criteria {
             energy: EnergyCheck::Bounded { margin: 0.05 },
             max_penetration: None,
             max_stretch: None,
+            max_inside_solid: None,
             max_self_intersections: None,
             // Kinematic vertices are reset onto their targets every substep: only round-off remains.
             max_attached_drift: 1e-9,
@@ -114,6 +120,9 @@ pub enum HardError {
     /// The case's hand-made panel was rejected by the cloth (its message).
     #[error("hard case {case}: panel rejected: {message}")]
     Panel { case: &'static str, message: String },
+    /// Data the case needs is not on this machine (pybullet_data's robots).
+    #[error("hard case {case}: {message}")]
+    MissingData { case: &'static str, message: String },
     #[error("hard case {case}: no elastic effect to take the stability limit from")]
     NoElasticEffect { case: &'static str },
 }

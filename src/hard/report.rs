@@ -40,14 +40,14 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
     let _ = writeln!(
         s,
         "| case | pass | verts | integrator, dt x sub | frames | max abs x (m) | max speed (m/s) | \
-         energy excess | penetration (m) | stretch (x rest) | self-isect | drift (m) | creep | subdiv | unresolved | wall (s) |"
+         energy excess | penetration (m) | inside a solid (m) | stretch (x rest) | self-isect | drift (m) | creep | subdiv | unresolved | wall (s) |"
     );
-    let _ = writeln!(s, "|{}", "---|".repeat(16));
+    let _ = writeln!(s, "|{}", "---|".repeat(17));
     for o in outcomes {
         let w = &o.worst;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} {:.3e} x {} | {} | {:.3} | {:.3} | {} | {:.2e} | {:.3} | {} | {:.1e} | {} | {} | {} | {:.1} |",
+            "| {} | {} | {} | {} {:.3e} x {} | {} | {:.3} | {:.3} | {} | {:.2e} | {} | {:.3} | {} | {:.1e} | {} | {} | {} | {:.1} |",
             o.name,
             if o.passed() { "yes" } else { "**no**" },
             o.vertices,
@@ -63,6 +63,8 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
                 (Some(e), EnergyCheck::NotMeasured) => format!("({e:.2e})"),
             },
             w.max_penetration,
+            w.max_inside_solid
+                .map_or_else(|| "-".to_string(), |d| format!("{d:.2e}")),
             w.max_stretch,
             opt(w.max_self_intersections),
             w.max_attached_drift,
@@ -99,6 +101,12 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
         }
         if let Some(p) = c.max_penetration {
             let _ = writeln!(s, "- penetration into the thickness layer <= {p} m");
+        }
+        if let Some(d) = c.max_inside_solid {
+            let _ = writeln!(
+                s,
+                "- no vertex deeper than {d} m inside an obstacle's solid (parry)"
+            );
         }
         if let Some(r) = c.max_stretch {
             let _ = writeln!(s, "- largest edge <= {r:.3} x its rest length");

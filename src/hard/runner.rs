@@ -24,6 +24,8 @@ pub struct Worst {
     /// The energy scale the excess is relative to (J).
     pub energy_scale: f64,
     pub max_penetration: f64,
+    /// Deepest cloth vertex inside an obstacle's solid (m), where the case judges it.
+    pub max_inside_solid: Option<f64>,
     /// Largest edge length over rest length at a frame end.
     pub max_stretch: f64,
     pub max_self_intersections: Option<usize>,
@@ -78,6 +80,25 @@ fn external_forces(sim: &Simulation, out: &mut Vec<Vec3>, scratch: &mut Vec<Vec3
     for (i, _) in &sim.cloth.kinematic {
         out[*i as usize] = -scratch[*i as usize];
     }
+}
+
+/// Depth of the deepest cloth vertex inside any obstacle's solid (m; 0 when none is inside), by
+/// parry's point projection at the obstacles' current poses.
+fn deepest_inside_solid(sim: &Simulation) -> f64 {
+    let Some(stage) = sim.collision() else {
+        return 0.0;
+    };
+    let mut deepest = 0.0f64;
+    for o in stage.obstacles() {
+        for p in &sim.cloth.x {
+            let local = o.pose.inverse_transform_point(*p).as_vec3();
+            let proj = o.shape.project_local_point(local, true);
+            if proj.is_inside {
+                deepest = deepest.max(f64::from((proj.point - local).length()));
+            }
+        }
+    }
+    deepest
 }
 
 fn attached_drift(sim: &Simulation) -> f64 {
@@ -171,6 +192,10 @@ pub fn run_case(case: Case) -> Outcome {
         }
         w.max_abs_x = c.x.iter().map(|p| p.length()).fold(w.max_abs_x, f64::max);
         w.max_stretch = w.max_stretch.max(1.0 + c.max_edge_stretch());
+        if criteria.max_inside_solid.is_some() {
+            let d = deepest_inside_solid(&sim);
+            w.max_inside_solid = Some(w.max_inside_solid.unwrap_or(0.0).max(d));
+        }
         w.max_speed = w.max_speed.max(m.max_speed);
         w.max_attached_drift = w.max_attached_drift.max(attached_drift(&sim));
         let e = m.kinetic_energy + m.potential_energy;
@@ -257,6 +282,13 @@ fn judge(c: &Criteria, w: &Worst, frames: usize) -> Vec<String> {
             f.push(format!(
                 "penetration {:.3e} m > {p:.3e} m",
                 w.max_penetration
+            ));
+        }
+    }
+    if let (Some(limit), Some(d)) = (c.max_inside_solid, w.max_inside_solid) {
+        if d > limit {
+            f.push(format!(
+                "a vertex {d:.3e} m inside an obstacle's solid > {limit:.3e} m"
             ));
         }
     }

@@ -5,6 +5,7 @@
 
 use super::setup::{bundled_scene, fill, impact_stretch_bound, pick, G};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
+use crate::robot::{JointTrajectory, TrajectoryPoint};
 use crate::scene::Scene;
 
 /// A bundled scene (config/) with self-collision and its exact intersection count switched on,
@@ -166,6 +167,72 @@ pub(super) fn towel_picked(res: Resolution) -> Result<Case, HardError> {
          (robot_pick_towel.yaml), self-collision on",
         &scene,
         pick(res, 3.0, 4.0),
+        criteria,
+    )
+}
+
+pub(super) fn shirt_cut_long_worn(res: Resolution) -> Result<Case, HardError> {
+    let name = "self_shirt_of_another_cut_worn";
+    let mut scene = bundled(name, "shirt.yaml", None, Some(pick(res, 0.04, 0.025)))?;
+    // The bundled shirt recut as a user would: narrow straps (5 cm) reaching 0.27 m above the
+    // armholes' tops, past the shoulders, and a body 3 cm longer, down to the base.
+    let outline = [
+        [-0.40, -0.38],
+        [0.40, -0.38],
+        [0.40, 0.0],
+        [0.16, 0.18],
+        [0.16, 0.45],
+        [0.11, 0.45],
+        [0.11, 0.15],
+        [-0.11, 0.15],
+        [-0.11, 0.45],
+        [-0.16, 0.45],
+        [-0.16, 0.18],
+        [-0.40, 0.0],
+    ];
+    for g in &mut scene.garments {
+        g.panels
+            .iter_mut()
+            .for_each(|p| p.outline = outline.to_vec());
+    }
+    // The arms, held out sideways while it is sewn, come down through the armholes at the
+    // shoulder roll's 2 rad/s limit, swing forward and back at 2 rad/s, and go back up.
+    let names = [
+        "left_shoulder_roll",
+        "right_shoulder_roll",
+        "left_shoulder_pitch",
+        "right_shoulder_pitch",
+    ];
+    let points = [
+        (0.0, [1.5, -1.5, 0.0, 0.0]),
+        (0.5, [1.5, -1.5, 0.0, 0.0]),
+        (1.1, [0.3, -0.3, 0.0, 0.0]),
+        (1.6, [0.3, -0.3, 1.0, -1.0]),
+        (2.6, [0.3, -0.3, -1.0, 1.0]),
+        (3.1, [0.3, -0.3, 0.0, 0.0]),
+        (3.7, [1.5, -1.5, 0.0, 0.0]),
+        (5.0, [1.5, -1.5, 0.0, 0.0]),
+    ];
+    if let Some(robot) = scene.robot.as_mut() {
+        robot.trajectory = Some(JointTrajectory {
+            names: names.map(String::from).to_vec(),
+            points: (points.iter())
+                .map(|&(t, q)| TrajectoryPoint {
+                    t,
+                    positions: q.to_vec(),
+                })
+                .collect(),
+        });
+    }
+    // The hands are ~0.75 m from the shoulders: 2 rad/s moves them at 1.5 m/s.
+    let criteria = robot_criteria(1.5, 1.5, 0.3, 0.006);
+    case(
+        name,
+        "sleeveless shirt recut with long narrow straps and a longer body, sewn on drape_bot \
+         with self-collision on, then worn while the arms come down through the armholes and \
+         swing at their joint-velocity limits",
+        &scene,
+        5.0,
         criteria,
     )
 }
