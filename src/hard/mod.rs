@@ -56,9 +56,9 @@ pub struct Criteria {
     /// Largest edge length over its rest length at any frame end (a bound the case derives
     /// from its material and speeds, e.g. `1 + v / c` for an impact at `v`).
     pub max_stretch: Option<f64>,
-    /// Depth of the deepest cloth vertex inside an obstacle's solid at a frame end (m), by parry's
-    /// point projection: independent of the contact stage, which has no inside test for mesh
-    /// links.
+    /// Depth of the deepest free cloth vertex inside an obstacle at a frame end (m), judged
+    /// independently of the contact stage (which has no inside test for mesh links): parry's
+    /// projection for primitives, the generalised winding number for meshes.
     pub max_inside_solid: Option<f64>,
     /// Intersecting non-adjacent triangle pairs at the end of any step.
     pub max_self_intersections: Option<usize>,

@@ -4,8 +4,8 @@
 //! user would script them: a towel held near the flange and swung or whipped, cloth wiped off a
 //! table by the flange, a towel picked from a table with the grasp rule.
 //!
-//! Besides the catalogue's usual criteria each case judges how deep any cloth vertex sits inside
-//! a link's solid, by parry's point projection rather than drape's contact code (mesh links have
+//! Besides the catalogue's usual criteria each case judges how deep any free cloth vertex sits
+//! inside a link, by the mesh's winding number rather than drape's contact code (mesh links have
 //! no inside test in the contact stage, so its own penetration figure cannot see a vertex that
 //! went through one).
 

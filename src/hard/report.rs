@@ -105,7 +105,7 @@ pub fn markdown(outcomes: &[Outcome], res: Resolution) -> String {
         if let Some(d) = c.max_inside_solid {
             let _ = writeln!(
                 s,
-                "- no vertex deeper than {d} m inside an obstacle's solid (parry)"
+                "- no free vertex deeper than {d} m inside an obstacle (winding number for meshes)"
             );
         }
         if let Some(r) = c.max_stretch {
