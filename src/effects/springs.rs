@@ -645,4 +645,72 @@ mod tests {
         );
         assert_eq!(springs.unseen_stretch(&[Vec3::ZERO; 2], &turned), 0.0);
     }
+
+    /// A spring with a knee: force continuous at the knee, the force minus the energy's
+    /// gradient and the Jacobian against finite differences of the force, below and past it.
+    #[test]
+    fn a_knee_is_continuous_and_its_jacobian_is_the_forces_derivative() {
+        let knee = Knee {
+            strain: 0.03,
+            ratio: 100.0,
+        };
+        let spring = Spring {
+            i: 0,
+            j: 1,
+            rest: 0.5,
+        };
+        let s = Springs::new("stretch", vec![spring], vec![1000.0], "k".into())
+            .with_knee(&[Some(knee)]);
+        let force = |x: &[Vec3]| {
+            let mut f = vec![Vec3::ZERO; 2];
+            let e = s.add_forces_energy(&State { t: 0.0, x, v: &[] }, &mut f);
+            (f, e)
+        };
+        let at = |len: f64| [Vec3::ZERO, Vec3::new(len * 0.6, len * 0.8, 0.0)];
+        // Continuity: just below and just past the knee extension, the same tension.
+        let (below, _) = force(&at(0.5 * 1.03 - 1e-12));
+        let (past, _) = force(&at(0.5 * 1.03 + 1e-12));
+        assert!((below[1] - past[1]).length() < 1e-6, "{below:?} {past:?}");
+        // Past the knee the tension is k e + (r - 1) k (e - s l).
+        let (f, _) = force(&at(0.5 * 1.05));
+        let t = 1000.0 * 0.025 + 99.0 * 1000.0 * 0.01;
+        assert!((f[1].length() - t).abs() < 1e-9 * t, "{}", f[1].length());
+
+        for len in [0.5 * 1.01, 0.5 * 1.06] {
+            let x = at(len);
+            let x = [x[0], x[1] + Vec3::new(0.0, 0.0, 0.01)];
+            let h = 1e-7;
+            // Energy: -dE/dx of vertex 1 along z is the force's z.
+            let (f0, _) = force(&x);
+            let mut xp = x;
+            xp[1].z += h;
+            let mut xm = x;
+            xm[1].z -= h;
+            let (fp, ep) = force(&xp);
+            let (fm, em) = force(&xm);
+            assert!(((ep - em) / (2.0 * h) + f0[1].z).abs() < 1e-5 * (1.0 + f0[1].length()));
+            // Jacobian column of vertex 1's z against the force's difference.
+            let pattern = || {
+                let mut p = PatternBuilder::new();
+                s.declare(&mut p);
+                p.build(2)
+            };
+            let (mut dfdx, mut dfdv) = (pattern(), pattern());
+            s.add_jacobians(
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &[],
+                },
+                &mut dfdx,
+                &mut dfdv,
+            );
+            let column = (fp[1] - fm[1]) / (2.0 * h);
+            let analytic = dfdx.diagonal(1) * Vec3::Z;
+            assert!(
+                (analytic - column).length() < 1e-4 * (1.0 + column.length()),
+                "at {len}: {analytic} vs {column}"
+            );
+        }
+    }
 }
