@@ -28,11 +28,11 @@
 //!
 //! The limit runs before the collision pass, whose answers may stretch an edge again. An
 //! obstacle's answer that takes an edge past its limit, or past a stiffening material's knee
-//! (`stretch_knee`), goes to the next solve instead ([`ResponseBound::hold_response`]): the answering end is moved back towards where the pass
-//! found it, along its own move, just far enough, and only where that path crosses no obstacle's
-//! surface (so the collision pass's guarantee that no vertex crosses a surface stands); its
-//! contact stays with the stage, and the next solve holds it against the surface with the
-//! cloth around it. `tests/fast_links.rs` and `tests/stretch_knee.rs` measure what is left on a
+//! (`stretch_knee`), goes to the next solve instead ([`ResponseBound::hold_response`]): the
+//! answering end is moved back towards where the pass found it, along its own move, just far
+//! enough, and only where that way crosses no obstacle's surface (so the collision pass's
+//! guarantee that no vertex crosses a surface stands); its contact stays with the stage, and
+//! the next solve holds it against the surface with the cloth around it. `tests/fast_links.rs` and `tests/stretch_knee.rs` measure what is left on a
 //! sheet pinned at its corners and hit by a rod.
 //!
 //! Tethers are built once per set of kinematic vertices, one Dijkstra per anchor over the mesh:
@@ -554,5 +554,31 @@ mod tests {
             8,
             "rebuilt for the one pin left"
         );
+    }
+
+    /// An edge a vertex-pass answer stretched past the bound: the answered end goes back along
+    /// its move to the allowed length; where the way back is not clear, or the end was not
+    /// answered, nothing moves.
+    #[test]
+    fn an_answer_past_the_bound_goes_back_along_its_move() {
+        let bound = ResponseBound {
+            edges: vec![(0, 1, 1.03)],
+        };
+        let before = [Vec3::ZERO, Vec3::X];
+        let answered = [Vec3::ZERO, Vec3::new(1.2, 0.1, 0.0)];
+        let mut x = answered;
+        assert_eq!(
+            bound.hold_response(&before, &mut x, |k| k == 1, |_, _| true),
+            1
+        );
+        assert!((x[0].distance(x[1]) - 1.03).abs() < 1e-12, "{x:?}");
+        // On the way back: between the answer and where the pass found it.
+        let (way, done) = (before[1] - answered[1], x[1] - answered[1]);
+        assert!(way.cross(done).length() < 1e-12 && way.dot(done) > 0.0);
+        for (deferred, clear) in [(false, true), (true, false)] {
+            let mut x = answered;
+            bound.hold_response(&before, &mut x, |_| deferred, |_, _| clear);
+            assert_eq!(x, answered);
+        }
     }
 }
