@@ -31,6 +31,9 @@ struct Sheet {
     friction: f64,
     /// `material.strain_limit`, where set.
     strain_limit: Option<f64>,
+    /// `material.stretch_knee` and `knee_stiffening`, where set.
+    knee: Option<f64>,
+    stiffening: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,7 +105,7 @@ cloths:
       bend_weft: 1.0e-5
       thickness: 0.004
       friction: {friction}
-{limit}{pins}obstacles:
+{limit}{knee}{pins}obstacles:
   - name: link
     shape: {shape}
     pose: {{ xyz: [0.0, {START_Y}, {CENTRE_Z}], rpy: {rpy} }}
@@ -117,6 +120,11 @@ collision: {{ mode: continuous }}
         limit = s
             .strain_limit
             .map_or(String::new(), |l| format!("      strain_limit: {l}\n")),
+        knee = s
+            .knee
+            .map_or(String::new(), |l| format!("      stretch_knee: {l}\n"))
+            + &s.stiffening
+                .map_or(String::new(), |r| format!("      knee_stiffening: {r}\n")),
     )
 }
 
@@ -303,6 +311,8 @@ fn full_sheet(pins: Pins) -> Sheet {
         pins,
         friction: 0.3,
         strain_limit: None,
+        knee: None,
+        stiffening: None,
     }
 }
 
@@ -318,7 +328,8 @@ fn pins_of(pinned: bool) -> Pins {
 /// One case picked by the environment (`FAST_LINK=capsule:0.005:20`, `:pinned` appended for
 /// corner pins; `FAST_LINK_ROW=1` pins the top row instead, `FAST_LINK_MU` sets the friction,
 /// `FAST_LINK_CI=1` the CI sheet, `FAST_LINK_FRAMES=1` prints every frame,
-/// `FAST_LINK_SUBSTEPS` the substeps per frame, `FAST_LINK_LIMIT` the strain limit), printed.
+/// `FAST_LINK_SUBSTEPS` the substeps per frame, `FAST_LINK_LIMIT` the strain limit,
+/// `FAST_LINK_KNEE` the stretch knee, `FAST_LINK_STIFFENING` its stiffening), printed.
 #[test]
 #[ignore]
 fn one_case() {
@@ -343,6 +354,12 @@ fn one_case() {
         sheet.friction = mu;
     }
     sheet.strain_limit = std::env::var("FAST_LINK_LIMIT")
+        .ok()
+        .and_then(|l| l.parse().ok());
+    sheet.knee = std::env::var("FAST_LINK_KNEE")
+        .ok()
+        .and_then(|l| l.parse().ok());
+    sheet.stiffening = std::env::var("FAST_LINK_STIFFENING")
         .ok()
         .and_then(|l| l.parse().ok());
     let c = Case {
@@ -400,6 +417,8 @@ fn ci_sheet(pins: Pins) -> Sheet {
         pins,
         friction: 0.3,
         strain_limit: None,
+        knee: None,
+        stiffening: None,
     }
 }
 
@@ -461,30 +480,38 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
     rods(true, Pins::Free, true);
 }
 
-/// Not judged yet: rods dragging a sheet pinned at its top corners, which must slide off under
-/// them, stay uncrossed (`rods_through_a_pinned_sheet_do_not_cross_it`) but overstretch well past
-/// the bound `1 + v / c + M g / k`. Where it arises (`pinned_sheet_stretch_by_pins_and_friction`):
-/// - with corner pins the largest edges are the ones at the two pinned vertices, and they come
-///   out of the solve, not the collision pass. It is not the rod's friction (friction 0 changes
-///   little), nor the bottom edge catching (the stretch is there while the bottom row is still
-///   under the rod): the pull of all 20 columns over the rod goes through two vertices, a point
-///   load the bound of a 1-D front (`1 + 2 v / c`) does not describe;
-/// - with the whole top row pinned instead the stretch is far smaller, near the bound; the
-///   collision pass adds to it in the rows passing over the rod, where the feature pass answers
-///   new rod contacts by position (a jump of up to the third of a spacing that `sim/fast.rs`
-///   allows, `jumped`). The front of a link's drag (`sim/front.rs`) ties the cloth behind the
-///   link to it where pins hold that cloth back.
+/// Rods of 3 and 5 mm at 5, 20 and 40 m/s through the CI sheet pinned at its top corners, of
+/// a fabric that stiffens past 3 % (`stretch_knee: 0.03`, `effects/springs.rs`): no crossing,
+/// and every edge within 1.06 of its rest length at every frame end.
 ///
-/// The bound is not the physics of a pinned sheet: an independent 1-D reference of the same
-/// material (`pinned_sheet_stretch_against_the_reference_string`) stretches more than drape's
-/// pinned sheets at every speed, as its free tail whips over the rod and wraps around it, and
-/// drape's top row is converged in time and space. The test stays ignored until a bound for
-/// pinned sheets is stated.
+/// With linear springs the sheet overstretches far past the bound `1 + v / c + M g / k` of a
+/// 1-D front, and that is the model's answer, not an error: the pull of the columns over the
+/// rod goes through the two pinned vertices, a point load, and an independent 1-D reference
+/// of the same material (`pinned_sheet_stretch_against_the_reference_string`) stretches more
+/// than drape's pinned sheets at every speed. Where it arises is measured by
+/// `pinned_sheet_stretch_by_pins_and_friction`.
 #[test]
-#[ignore = "the bound 1 + v / c is not a pinned sheet's physics (see the reference string)"]
-fn rods_through_a_pinned_sheet_do_not_cross_it_or_overstretch() {
-    rods(false, Pins::Corners, true);
-    rods(true, Pins::Corners, true);
+#[ignore = "12 rod runs; measures the stiffening material against 1.06"]
+fn rods_through_a_pinned_sheet_of_stiffening_fabric_stay_near_its_knee() {
+    let mut worst = Vec::new();
+    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
+        for speed in [5.0, 20.0, 40.0] {
+            let mut sheet = ci_sheet(Pins::Corners);
+            sheet.knee = Some(0.03);
+            let c = Case {
+                sheet,
+                link,
+                speed,
+                angle: 0.0,
+                frames: 9,
+            };
+            let o = accept(&c, false);
+            worst.push((format!("{link:?} at {speed} m/s"), o.max_stretch));
+        }
+    }
+    eprintln!("{worst:?}");
+    let over: Vec<_> = worst.iter().filter(|(_, s)| *s > 1.06).collect();
+    assert!(over.is_empty(), "edges past 1.06: {over:?}");
 }
 
 /// What does hold for a sheet pinned at its top corners (the stretch does not, see below): no

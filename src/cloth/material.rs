@@ -47,6 +47,28 @@ pub struct Material {
     /// springs alone resist stretch and nothing is spent on it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub strain_limit: Option<f64>,
+    /// Strain at which the stretch and shear springs stiffen (0.03: 3 %), as woven fabric does
+    /// once its yarns are straight (its tensile curve is J-shaped). Past it a spring's tangent
+    /// stiffness is `knee_stiffening` times its own, inside the solve (`effects::springs`);
+    /// absent, the springs are linear and nothing is spent on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stretch_knee: Option<f64>,
+    /// Tangent stiffness past `stretch_knee` over the stiffness below it (default
+    /// [`DEFAULT_KNEE_STIFFENING`]); read only with `stretch_knee`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub knee_stiffening: Option<f64>,
+}
+
+/// Stiffening past the knee where a material names `stretch_knee` alone.
+pub const DEFAULT_KNEE_STIFFENING: f64 = 100.0;
+
+impl Material {
+    /// Where this material's stretch and shear springs stiffen: `(knee strain, stiffening)`;
+    /// `None` for linear springs.
+    pub fn knee(&self) -> Option<(f64, f64)> {
+        self.stretch_knee
+            .map(|s| (s, self.knee_stiffening.unwrap_or(DEFAULT_KNEE_STIFFENING)))
+    }
 }
 
 impl Default for Material {
@@ -68,6 +90,8 @@ impl Default for Material {
             thickness: 0.005,
             friction: 0.3,
             strain_limit: None,
+            stretch_knee: None,
+            knee_stiffening: None,
         }
     }
 }

@@ -20,6 +20,6 @@ pub use effect::{Effect, State, StiffnessBound};
 pub use gravity::Gravity;
 pub use plan::{EffectKind, EffectPlan, Elements, Lattice, WindPlan};
 pub use set::EffectSet;
-pub use springs::Springs;
+pub use springs::{Knee, Springs};
 pub use stencils::{Bending, StencilSet, Twist};
 pub use wind::{Gust, Wind, WindKey};

@@ -8,6 +8,7 @@
 //! piece; the garment's welded topology implements it too. The scene turns its `effects:` list
 //! into a plan; a term the plan does not name is never built.
 
+use super::springs::Knee;
 use super::{
     AirDrag, Bending, EffectSet, Gravity, Gust, SpringDamping, Springs, Twist, VelocityDiffusion,
     Wind, WindKey,
@@ -97,6 +98,9 @@ pub struct SpringGroup {
     pub k: Vec<f64>,
     /// The scene key of the stiffness, e.g. `cloths[0].material.stretch`.
     pub parameter: String,
+    /// Per spring where its material stiffens it (`material.stretch_knee`); empty when no
+    /// spring of the group has a knee.
+    pub knee: Vec<Option<Knee>>,
 }
 
 /// Bending or twist stencils sharing one scene parameter: per stencil its rigidity.
@@ -160,7 +164,8 @@ impl EffectPlan {
                     };
                     for g in elements.springs(kind) {
                         if !g.springs.is_empty() {
-                            set.push(Box::new(Springs::new(name, g.springs, g.k, g.parameter)));
+                            let springs = Springs::new(name, g.springs, g.k, g.parameter);
+                            set.push(Box::new(springs.with_knee(&g.knee)));
                         }
                     }
                 }
@@ -229,11 +234,17 @@ impl Elements for Lattice<'_> {
                 SpringKind::SkipOne => p.material.skip_one,
             };
             let s = springs(p, kind);
+            // The lattice's edges and diagonals stiffen; skip-one springs stand in for bending.
+            let knee = match (kind, p.material.knee()) {
+                (SpringKind::SkipOne, _) | (_, None) => Vec::new(),
+                (_, Some((strain, ratio))) => vec![Some(Knee { strain, ratio }); s.len()],
+            };
             if k > 0.0 && !s.is_empty() {
                 out.push(SpringGroup {
                     k: vec![k; s.len()],
                     springs: s,
                     parameter: material_key(i, name),
+                    knee,
                 });
             }
         }

@@ -3,17 +3,89 @@
 //! Energy `k/2 (L - l)^2` with `L = |xi - xj|`. The Jacobian is the usual
 //! `-k [n n^T + (1 - l/L)(I - n n^T)]`, with the transverse term clamped at zero under compression
 //! (Choi and Ko): keeping it would make the system matrix indefinite and break conjugate gradients.
+//!
+//! A material with a knee (`stretch_knee`, [`Knee`]) adds to each spring a one-sided spring of
+//! stiffness `(r - 1) k` that engages past the knee extension `s l`: tension
+//! `T = k e + (r - 1) k max(0, e - s l)`, continuous, with tangent `k` below the knee and `r k`
+//! past it. The Jacobian carries that tangent along the spring and `T / L` across it, so the
+//! implicit solve itself holds edges near `1 + s`. Springs without a knee take the plain pass
+//! (the knee pass is never run for them).
 
 use super::effect::{Effect, State, StiffnessBound};
 use crate::cloth::topology::Spring;
 use crate::linalg::outer;
 use crate::linalg::{BlockCsr, PairSlots, PatternBuilder};
 use crate::{Mat3, Vec3};
+use std::ops::Range;
+
+/// Where a spring stiffens: past `strain` (of its rest length) its tangent stiffness is `ratio`
+/// times its own.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Knee {
+    pub strain: f64,
+    pub ratio: f64,
+}
+
+/// A spring's knee in the units of the force pass: the extension `s l` (m) past which the
+/// extra stiffness `(r - 1) k` (N/m) engages. No knee: an infinite extension, no extra.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct KneeAt {
+    extension: f64,
+    extra: f64,
+}
+
+impl KneeAt {
+    const NONE: KneeAt = KneeAt {
+        extension: f64::INFINITY,
+        extra: 0.0,
+    };
+
+    fn of(knee: Option<Knee>, rest: f64, k: f64) -> Self {
+        match knee {
+            Some(n) if n.ratio > 1.0 => KneeAt {
+                extension: n.strain * rest,
+                extra: (n.ratio - 1.0) * k,
+            },
+            _ => KneeAt::NONE,
+        }
+    }
+
+    /// Extension past the knee (m; 0 below it).
+    #[inline(always)]
+    fn over(&self, e: f64) -> f64 {
+        (e - self.extension).max(0.0)
+    }
+
+    /// Tension `k e + extra (e - s l)_+` (N) at extension `e`.
+    #[inline(always)]
+    fn tension(&self, k: f64, e: f64) -> f64 {
+        k * e + self.extra * self.over(e)
+    }
+
+    /// Energy `k e^2 / 2 + extra (e - s l)_+^2 / 2` (J).
+    #[inline(always)]
+    fn energy(&self, k: f64, e: f64) -> f64 {
+        let o = self.over(e);
+        0.5 * k * e * e + 0.5 * self.extra * o * o
+    }
+
+    /// Tangent stiffness `dT/de` (N/m).
+    #[inline(always)]
+    fn tangent(&self, k: f64, e: f64) -> f64 {
+        if e > self.extension {
+            k + self.extra
+        } else {
+            k
+        }
+    }
+}
 
 pub struct Springs {
     name: &'static str,
     springs: Vec<Spring>,
     k: Vec<f64>,
+    /// Per spring, where a material stiffens it; `None` where no spring has a knee.
+    knee: Option<Vec<KneeAt>>,
     /// One past the largest vertex index: the force pass checks it once against the slices and
     /// then indexes without per-spring bounds checks.
     vertex_bound: usize,
@@ -36,10 +108,60 @@ impl Springs {
             name,
             springs,
             k,
+            knee: None,
             vertex_bound,
             parameter,
             slots: PairSlots::default(),
         }
+    }
+
+    /// These springs with the knees `knee` (one per spring, `None` for a linear one; see
+    /// [`Knee`]). Springs none of which has a knee stay on the linear pass.
+    pub fn with_knee(mut self, knee: &[Option<Knee>]) -> Self {
+        debug_assert_eq!(knee.len(), self.springs.len());
+        let at: Vec<KneeAt> = (self.springs.iter().zip(&self.k))
+            .zip(knee.iter().chain(std::iter::repeat(&None)))
+            .map(|((s, &k), n)| KneeAt::of(*n, s.rest, k))
+            .collect();
+        self.knee = at.iter().any(|a| a.extra > 0.0).then_some(at);
+        self
+    }
+
+    /// The tension (N) and extension (m) law of spring `q` at extension `e`: `(T, dT/de)`.
+    #[inline(always)]
+    fn law(&self, q: usize, e: f64) -> (f64, f64) {
+        let k = self.k[q];
+        match &self.knee {
+            Some(at) => (at[q].tension(k, e), at[q].tangent(k, e)),
+            None => (k * e, k),
+        }
+    }
+
+    /// Forces and energy of the springs in `r` with their knees (the knee pass: scalar, one
+    /// spring at a time).
+    fn knee_forces_energy(
+        &self,
+        at: &[KneeAt],
+        x: &[Vec3],
+        f: &mut [Vec3],
+        r: Range<usize>,
+    ) -> f64 {
+        let mut energy = 0.0;
+        for q in r {
+            let (s, k, a) = (&self.springs[q], self.k[q], &at[q]);
+            let d = x[s.i as usize] - x[s.j as usize];
+            let len = d.length();
+            let e = len - s.rest;
+            let fi = if len > 0.0 {
+                d * (-a.tension(k, e) / len)
+            } else {
+                Vec3::ZERO
+            };
+            f[s.i as usize] += fi;
+            f[s.j as usize] -= fi;
+            energy += a.energy(k, e);
+        }
+        energy
     }
 
     pub fn len(&self) -> usize {
@@ -240,7 +362,7 @@ impl Effect for Springs {
 
     fn add_forces(&self, st: &State, f: &mut [Vec3]) {
         // The fused pass: the energy costs a few multiplies next to the square root and division.
-        forces_energy(st.x, f, &self.springs, &self.k, self.vertex_bound);
+        self.add_forces_energy_part(st, f, 0, 1);
     }
 
     fn add_forces_energy(&self, st: &State, f: &mut [Vec3]) -> f64 {
@@ -249,6 +371,9 @@ impl Effect for Springs {
 
     fn add_forces_energy_part(&self, st: &State, f: &mut [Vec3], part: usize, parts: usize) -> f64 {
         let r = crate::par::part_range(self.springs.len(), part, parts);
+        if let Some(at) = &self.knee {
+            return self.knee_forces_energy(at, st.x, f, r);
+        }
         forces_energy(
             st.x,
             f,
@@ -262,6 +387,23 @@ impl Effect for Springs {
         let slots = self
             .slots
             .get(dfdx, self.springs.iter().map(|s| (s.i, s.j)));
+        if self.knee.is_some() {
+            // Tangent `dT/de` along the spring, `T / L` across it (clamped at zero).
+            dfdx.add_pairs(&slots.1, |q| {
+                let s = &self.springs[q];
+                let d = st.x[s.i as usize] - st.x[s.j as usize];
+                let len = d.length();
+                let (t, kt) = self.law(q, len - s.rest);
+                if len > 0.0 {
+                    let n = d / len;
+                    let nn = outer(n, n);
+                    (nn * -kt) + (Mat3::IDENTITY - nn) * -(t / len).max(0.0)
+                } else {
+                    Mat3::IDENTITY * -kt
+                }
+            });
+            return;
+        }
         dfdx.add_pairs(&slots.1, |q| {
             let (s, k) = (&self.springs[q], self.k[q]);
             let d = st.x[s.i as usize] - st.x[s.j as usize];
@@ -288,7 +430,8 @@ impl Effect for Springs {
         let slots = self
             .slots
             .get(dfdx, self.springs.iter().map(|s| (s.i, s.j)));
-        for ((s, &k), sl) in self.springs.iter().zip(&self.k).zip(&slots.1) {
+        for (q, (s, sl)) in self.springs.iter().zip(&slots.1).enumerate() {
+            let k = self.k[q];
             let e = front(s.i).max(front(s.j));
             if e <= 0.0 || !e.is_finite() {
                 continue;
@@ -299,8 +442,10 @@ impl Effect for Springs {
                 continue;
             }
             let n = d / len;
-            let transverse = (1.0 - s.rest / len).max(0.0);
-            let extra = e / (1.0 + e) - transverse;
+            // `T / (k L)`: at the spring's length now and at the front's strain.
+            let transverse = (self.law(q, len - s.rest).0 / (k * len)).max(0.0);
+            let at_front = self.law(q, e * s.rest).0 / (k * (1.0 + e) * s.rest);
+            let extra = at_front - transverse;
             if extra <= 0.0 {
                 continue;
             }
@@ -313,6 +458,13 @@ impl Effect for Springs {
     }
 
     fn energy(&self, x: &[Vec3]) -> f64 {
+        if let Some(at) = &self.knee {
+            return (self.springs.iter().zip(&self.k).zip(at))
+                .map(|((s, &k), a)| {
+                    a.energy(k, (x[s.i as usize] - x[s.j as usize]).length() - s.rest)
+                })
+                .sum();
+        }
         self.springs
             .iter()
             .zip(&self.k)
@@ -323,27 +475,34 @@ impl Effect for Springs {
             .sum()
     }
 
+    /// With knees, also the stiffening a linearisation below the knee did not see: a spring
+    /// that ends `o` past its knee from a start below it carries `(r - 1) k o` more tension
+    /// than the linearisation's, as much as `(r - 1) o` of stretch would at its stiffness below
+    /// the knee.
     fn unseen_stretch(&self, x0: &[Vec3], x1: &[Vec3]) -> f64 {
         let dir = |x: &[Vec3], s: &Spring| x[s.i as usize] - x[s.j as usize];
-        self.springs
-            .iter()
-            .filter(|s| s.rest > 0.0)
-            .map(|s| {
-                let (d0, d1) = (dir(x0, s), dir(x1, s));
-                // Coincident ends at `x0`: linearised isotropically, nothing turns unseen.
-                let n0 = d0.normalize_or_zero();
-                if n0 == Vec3::ZERO {
+        let turning = self.turning_unseen(x0, x1);
+        let Some(at) = &self.knee else {
+            return turning;
+        };
+        (self.springs.iter().zip(&self.k).zip(at))
+            .filter(|((s, _), a)| s.rest > 0.0 && a.extra > 0.0)
+            .map(|((s, &k), a)| {
+                let e0 = dir(x0, s).length() - s.rest;
+                if e0 > a.extension {
                     return 0.0;
                 }
-                (d1.length() - n0.dot(d1)) / s.rest
+                a.extra / k * a.over(dir(x1, s).length() - s.rest) / s.rest
             })
-            .fold(0.0, f64::max)
+            .fold(turning, f64::max)
     }
 
     fn stiffness(&self, mass: &[f64]) -> Option<StiffnessBound> {
-        // Gershgorin: lambda_max(M^-1 K) <= max_i sum_{springs at i} 2 k / m_i.
+        // Gershgorin: lambda_max(M^-1 K) <= max_i sum_{springs at i} 2 k / m_i, with `k` the
+        // stiffness past the knee where there is one.
         let mut row = vec![0.0; mass.len()];
-        for (s, &k) in self.springs.iter().zip(&self.k) {
+        for (q, s) in self.springs.iter().enumerate() {
+            let k = self.k[q] + self.knee.as_ref().map_or(0.0, |at| at[q].extra);
             row[s.i as usize] += 2.0 * k;
             row[s.j as usize] += 2.0 * k;
         }
@@ -358,6 +517,27 @@ impl Effect for Springs {
             vertex,
             parameter: self.parameter.clone(),
         })
+    }
+}
+
+impl Springs {
+    /// The stretch the springs' turning hides from a linearisation at `x0` (see
+    /// [`Effect::unseen_stretch`]).
+    fn turning_unseen(&self, x0: &[Vec3], x1: &[Vec3]) -> f64 {
+        let dir = |x: &[Vec3], s: &Spring| x[s.i as usize] - x[s.j as usize];
+        self.springs
+            .iter()
+            .filter(|s| s.rest > 0.0)
+            .map(|s| {
+                let (d0, d1) = (dir(x0, s), dir(x1, s));
+                // Coincident ends at `x0`: linearised isotropically, nothing turns unseen.
+                let n0 = d0.normalize_or_zero();
+                if n0 == Vec3::ZERO {
+                    return 0.0;
+                }
+                (d1.length() - n0.dot(d1)) / s.rest
+            })
+            .fold(0.0, f64::max)
     }
 }
 
@@ -464,5 +644,73 @@ mod tests {
             0.0
         );
         assert_eq!(springs.unseen_stretch(&[Vec3::ZERO; 2], &turned), 0.0);
+    }
+
+    /// A spring with a knee: force continuous at the knee, the force minus the energy's
+    /// gradient and the Jacobian against finite differences of the force, below and past it.
+    #[test]
+    fn a_knee_is_continuous_and_its_jacobian_is_the_forces_derivative() {
+        let knee = Knee {
+            strain: 0.03,
+            ratio: 100.0,
+        };
+        let spring = Spring {
+            i: 0,
+            j: 1,
+            rest: 0.5,
+        };
+        let s = Springs::new("stretch", vec![spring], vec![1000.0], "k".into())
+            .with_knee(&[Some(knee)]);
+        let force = |x: &[Vec3]| {
+            let mut f = vec![Vec3::ZERO; 2];
+            let e = s.add_forces_energy(&State { t: 0.0, x, v: &[] }, &mut f);
+            (f, e)
+        };
+        let at = |len: f64| [Vec3::ZERO, Vec3::new(len * 0.6, len * 0.8, 0.0)];
+        // Continuity: just below and just past the knee extension, the same tension.
+        let (below, _) = force(&at(0.5 * 1.03 - 1e-12));
+        let (past, _) = force(&at(0.5 * 1.03 + 1e-12));
+        assert!((below[1] - past[1]).length() < 1e-6, "{below:?} {past:?}");
+        // Past the knee the tension is k e + (r - 1) k (e - s l).
+        let (f, _) = force(&at(0.5 * 1.05));
+        let t = 1000.0 * 0.025 + 99.0 * 1000.0 * 0.01;
+        assert!((f[1].length() - t).abs() < 1e-9 * t, "{}", f[1].length());
+
+        for len in [0.5 * 1.01, 0.5 * 1.06] {
+            let x = at(len);
+            let x = [x[0], x[1] + Vec3::new(0.0, 0.0, 0.01)];
+            let h = 1e-7;
+            // Energy: -dE/dx of vertex 1 along z is the force's z.
+            let (f0, _) = force(&x);
+            let mut xp = x;
+            xp[1].z += h;
+            let mut xm = x;
+            xm[1].z -= h;
+            let (fp, ep) = force(&xp);
+            let (fm, em) = force(&xm);
+            assert!(((ep - em) / (2.0 * h) + f0[1].z).abs() < 1e-5 * (1.0 + f0[1].length()));
+            // Jacobian column of vertex 1's z against the force's difference.
+            let pattern = || {
+                let mut p = PatternBuilder::new();
+                s.declare(&mut p);
+                p.build(2)
+            };
+            let (mut dfdx, mut dfdv) = (pattern(), pattern());
+            s.add_jacobians(
+                &State {
+                    t: 0.0,
+                    x: &x,
+                    v: &[],
+                },
+                &mut dfdx,
+                &mut dfdv,
+            );
+            let column = (fp[1] - fm[1]) / (2.0 * h);
+            let analytic = dfdx.diagonal(1) * Vec3::Z;
+            assert!(
+                (analytic - column).length() < 1e-4 * (1.0 + column.length()),
+                "at {len}: {analytic} vs {column}"
+            );
+        }
     }
 }

@@ -13,6 +13,7 @@ use crate::cloth::topology::{
 };
 use crate::cloth::{Cloth, Material, Panel, Piece};
 use crate::effects::plan::{Elements, Pairs, SpringGroup, StencilGroup};
+use crate::effects::Knee;
 use crate::Vec3;
 use glam::DVec2;
 use std::collections::HashMap;
@@ -267,17 +268,24 @@ impl Elements for Topology {
         if kind != SpringKind::Structural {
             return Vec::new();
         }
-        let (springs, k): (Vec<Spring>, Vec<f64>) = self
-            .springs
-            .iter()
-            .zip(&self.spring_material)
-            .filter(|(_, m)| m.stretch > 0.0)
-            .map(|(s, m)| (*s, m.stretch))
-            .unzip();
+        let kept = || {
+            (self.springs.iter())
+                .zip(&self.spring_material)
+                .filter(|(_, m)| m.stretch > 0.0)
+        };
+        let (springs, k): (Vec<Spring>, Vec<f64>) = kept().map(|(s, m)| (*s, m.stretch)).unzip();
+        let knee: Vec<Option<Knee>> = kept()
+            .map(|(_, m)| m.knee().map(|(strain, ratio)| Knee { strain, ratio }))
+            .collect();
         vec![SpringGroup {
             springs,
             k,
             parameter: "garments.material.stretch".into(),
+            knee: if knee.iter().any(Option::is_some) {
+                knee
+            } else {
+                Vec::new()
+            },
         }]
     }
 

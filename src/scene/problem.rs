@@ -85,6 +85,8 @@ pub enum Problem {
     Empty,
     #[error("{found} values for {expected} joint names")]
     Length { found: usize, expected: usize },
+    #[error("has no effect without {needs}")]
+    Without { needs: &'static str },
     #[error(transparent)]
     Garment(crate::garment::GarmentError),
     #[error(transparent)]
@@ -140,6 +142,11 @@ pub const MAX_DAMPING: f64 = 1e6;
 pub const MAX_FRICTION: f64 = 100.0;
 /// Largest strain limit (an edge allowed to 11 times its rest length limits nothing real).
 pub const MAX_STRAIN_LIMIT: f64 = 10.0;
+/// Largest knee strain: a fabric that stiffens only past twice its length does not stiffen.
+pub const MAX_STRETCH_KNEE: f64 = 1.0;
+/// Stiffening past the knee, at most: far beyond any fabric's, and short of making the tangent
+/// stiffness's sum with the rest of the system matrix lose the rest to rounding.
+pub const MAX_KNEE_STIFFENING: f64 = 1e4;
 /// Wind: speed (m/s), gust frequency (Hz), air density (kg/m^3), drag coefficient.
 pub const MAX_WIND: f64 = 1e3;
 pub const MAX_FREQUENCY: f64 = 1e4;

@@ -445,6 +445,28 @@ impl Scene {
         if let Some(limit) = m.strain_limit {
             positive(&key("strain_limit"), limit, MAX_STRAIN_LIMIT, "")?;
         }
+        if let Some(knee) = m.stretch_knee {
+            positive(&key("stretch_knee"), knee, MAX_STRETCH_KNEE, "")?;
+        }
+        if let Some(r) = m.knee_stiffening {
+            if m.stretch_knee.is_none() {
+                let needs = "stretch_knee";
+                return Err((key("knee_stiffening"), Problem::Without { needs }));
+            }
+            finite(&key("knee_stiffening"), r)?;
+            if r < 1.0 {
+                let (min, unit) = (1.0, "");
+                return Err((
+                    key("knee_stiffening"),
+                    Problem::TooSmall {
+                        value: r,
+                        min,
+                        unit,
+                    },
+                ));
+            }
+            bounded(&key("knee_stiffening"), r, MAX_KNEE_STIFFENING, "")?;
+        }
         Ok(())
     }
 

@@ -26,10 +26,14 @@
 //!   frame into, a centimetre's correction over 65 us is 150 m/s, which Provot's plain update
 //!   would put into the cloth.
 //!
-//! The limit runs before the collision pass, which has the last word: its answers may stretch
-//! an edge again (a pass after it, moving the cloth unchecked, would undo the collision pass's
-//! guarantee that no vertex crosses a surface). `tests/fast_links.rs` measures what is left on
-//! a sheet pinned at its corners and hit by a rod.
+//! The limit runs before the collision pass, whose answers may stretch an edge again. An
+//! obstacle's answer that takes an edge past its limit, or past a stiffening material's knee
+//! (`stretch_knee`), goes to the next solve instead ([`ResponseBound::hold_response`]): the
+//! answering end is moved back towards where the pass found it, along its own move, just far
+//! enough, and only where that way crosses no obstacle's surface (so the collision pass's
+//! guarantee that no vertex crosses a surface stands); its contact stays with the stage, and
+//! the next solve holds it against the surface with the cloth around it. `tests/fast_links.rs` and `tests/stretch_knee.rs` measure what is left on a
+//! sheet pinned at its corners and hit by a rod.
 //!
 //! Tethers are built once per set of kinematic vertices, one Dijkstra per anchor over the mesh:
 //! a grasp or a release that changes the set pays it again.
@@ -50,6 +54,14 @@ const MAX_PASSES: usize = 32;
 
 /// Tethers per free vertex: to its nearest kinematic vertices by rest geodesic distance.
 const TETHERS: usize = 4;
+
+/// Passes over the edges at most when the collision pass's answers are held to the bound (a
+/// vertex moved back for one edge may stretch another that the same answer moved).
+const HOLD_PASSES: usize = 8;
+
+/// An edge counts as within the collision pass's bound when it exceeds it by at most this
+/// fraction (round-off of the way back).
+const HOLD_SLACK: f64 = 1e-9;
 
 /// The limit of one cloth's edges (built where a piece's material sets `strain_limit`).
 #[derive(Debug, Clone)]
@@ -214,6 +226,123 @@ impl StrainLimit {
             .fold(0.0, f64::max);
         out
     }
+}
+
+/// The bound the collision pass's answers are held to (built where a piece's material sets
+/// `strain_limit` or `stretch_knee`): per mesh edge the shorter of `1 + strain_limit` and
+/// `1 + stretch_knee` times its rest length. Past the knee only the solve, which knows the
+/// stiffening, stretches an edge; past the limit, nothing does.
+#[derive(Debug, Clone)]
+pub(super) struct ResponseBound {
+    /// `(i, j, allowed length)` of every bounded mesh edge.
+    edges: Vec<(u32, u32, f64)>,
+}
+
+impl ResponseBound {
+    /// The bound of `cloth`'s pieces that set a limit or a knee; `None` when none does.
+    pub fn of(cloth: &Cloth) -> Option<Self> {
+        let strain = |m: &crate::cloth::Material| match (m.strain_limit, m.stretch_knee) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        if cloth.pieces.iter().all(|p| strain(&p.material).is_none()) {
+            return None;
+        }
+        let mut edges = Vec::new();
+        for (i, j) in crate::cloth::topology::unique_edges(&cloth.triangles) {
+            let (a, b) = (i as usize, j as usize);
+            let (Some(ua), Some(ub)) = (cloth.uv.get(a), cloth.uv.get(b)) else {
+                continue;
+            };
+            let rest = ua.distance(*ub);
+            let s = cloth.piece_of(a).and_then(|p| strain(&p.material));
+            if let Some(s) = s.filter(|_| rest > 0.0 && rest.is_finite()) {
+                edges.push((i, j, rest * (1.0 + s)));
+            }
+        }
+        Some(Self { edges })
+    }
+
+    /// Holds the collision pass's answers to the bound: where an edge ends longer than its
+    /// allowed length, and longer than in `before` (the positions the pass started from), its
+    /// ends that `deferred` allows (the ones the vertex pass answered) go back towards their
+    /// `before` position along their move, both by the same share of it, the least that brings
+    /// the edge to the longer of its allowed length and its length in `before`; their contacts
+    /// stay with the stage, for the next solve. A vertex goes back only where `clear(from, to)`
+    /// says the way crosses no obstacle's surface. Returns the edges that needed it; the
+    /// velocities stay those of the answer.
+    pub fn hold_response(
+        &self,
+        before: &[Vec3],
+        x: &mut [Vec3],
+        deferred: impl Fn(usize) -> bool,
+        clear: impl Fn(Vec3, Vec3) -> bool,
+    ) -> u32 {
+        let mut held = 0u32;
+        for pass in 0..HOLD_PASSES {
+            let mut changed = false;
+            for &(i, j, allowed) in &self.edges {
+                let (i, j) = (i as usize, j as usize);
+                let len = x[i].distance(x[j]);
+                let target = allowed.max(before[i].distance(before[j]));
+                if len.is_nan() || len <= target * (1.0 + HOLD_SLACK) {
+                    continue;
+                }
+                let back = |k: usize| (deferred(k) && x[k] != before[k]).then(|| before[k] - x[k]);
+                let (bi, bj) = (back(i), back(j));
+                if bi.is_none() && bj.is_none() {
+                    continue;
+                }
+                // The edge at share `t` of the way back: `d + t m`; the least `t` in [0, 1]
+                // with `|d + t m| = target` (the edge is longer than `target` at `t = 0`).
+                let d = x[i] - x[j];
+                let m = bi.unwrap_or(Vec3::ZERO) - bj.unwrap_or(Vec3::ZERO);
+                let (a, b, c) = (
+                    m.length_squared(),
+                    d.dot(m),
+                    d.length_squared() - target * target,
+                );
+                let disc = b * b - a * c;
+                let t = if a > 0.0 && b < 0.0 && disc >= 0.0 {
+                    ((-b - disc.sqrt()) / a).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                if pass == 0 {
+                    held += 1;
+                }
+                for (k, way) in [(i, bi), (j, bj)] {
+                    if let Some(way) = way {
+                        let to = x[k] + way * t;
+                        if clear(x[k], to) {
+                            x[k] = to;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        held
+    }
+}
+
+/// Whether the straight way from `from` to `to` stays clear of the solids of `stage`'s
+/// obstacles: `to` inside none, and the segment through no surface.
+pub(super) fn clear_of_obstacles(
+    stage: &crate::collide::CollisionStage,
+    from: Vec3,
+    to: Vec3,
+) -> bool {
+    stage.obstacles().iter().all(|o| {
+        let (a, b) = (
+            o.pose.inverse_transform_point(from),
+            o.pose.inverse_transform_point(to),
+        );
+        !o.contains_local(b) && o.cast_local(a, b).is_none() && o.cast_local(b, a).is_none()
+    })
 }
 
 /// For every limited free vertex, its [`TETHERS`] nearest `anchors` by rest geodesic distance
@@ -425,5 +554,31 @@ mod tests {
             8,
             "rebuilt for the one pin left"
         );
+    }
+
+    /// An edge a vertex-pass answer stretched past the bound: the answered end goes back along
+    /// its move to the allowed length; where the way back is not clear, or the end was not
+    /// answered, nothing moves.
+    #[test]
+    fn an_answer_past_the_bound_goes_back_along_its_move() {
+        let bound = ResponseBound {
+            edges: vec![(0, 1, 1.03)],
+        };
+        let before = [Vec3::ZERO, Vec3::X];
+        let answered = [Vec3::ZERO, Vec3::new(1.2, 0.1, 0.0)];
+        let mut x = answered;
+        assert_eq!(
+            bound.hold_response(&before, &mut x, |k| k == 1, |_, _| true),
+            1
+        );
+        assert!((x[0].distance(x[1]) - 1.03).abs() < 1e-12, "{x:?}");
+        // On the way back: between the answer and where the pass found it.
+        let (way, done) = (before[1] - answered[1], x[1] - answered[1]);
+        assert!(way.cross(done).length() < 1e-12 && way.dot(done) > 0.0);
+        for (deferred, clear) in [(false, true), (true, false)] {
+            let mut x = answered;
+            bound.hold_response(&before, &mut x, |_| deferred, |_, _| clear);
+            assert_eq!(x, answered);
+        }
     }
 }

@@ -3,7 +3,7 @@
 //! MuJoCo keeps `mjModel` apart from `mjData`.
 
 use super::guard::{GuardSettings, OutsideForces, Saved};
-use super::limit::{StrainLimit, Tethers};
+use super::limit::{ResponseBound, StrainLimit, Tethers};
 use crate::cloth::Cloth;
 use crate::effects::EffectSet;
 use crate::integrate::{Capabilities, StepReport};
@@ -38,6 +38,9 @@ pub(super) struct Model {
     pub omega_bound: Option<f64>,
     /// The materials' strain limit (`None` when no material sets one).
     pub limit: Option<StrainLimit>,
+    /// The bound the collision pass's answers are held to (`None` when no material sets a
+    /// strain limit or a knee).
+    pub response_bound: Option<ResponseBound>,
 }
 
 impl Model {
@@ -55,6 +58,7 @@ impl Model {
             caps,
             omega_bound,
             limit: StrainLimit::of(cloth),
+            response_bound: ResponseBound::of(cloth),
         }
     }
 
@@ -91,4 +95,7 @@ pub(super) struct Work {
     /// Scratch: the vertices near a moving obstacle, for fast contact's test (see
     /// `fast::outruns`).
     pub near: Vec<(usize, f64, f64)>,
+    /// Scratch: the positions the collision pass started from, where its answers are held to
+    /// a bound (see `ResponseBound::hold_response`).
+    pub pre_collision: Vec<Vec3>,
 }

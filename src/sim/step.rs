@@ -335,9 +335,25 @@ impl Simulation {
         let inv_mass = &mut self.work.inv_mass;
         self.cloth.inverse_masses_into(inv_mass);
         let (x, v) = (&mut self.cloth.x, &mut self.cloth.v);
+        let bound = self.model.response_bound.as_ref();
+        if bound.is_some() {
+            self.work.pre_collision.clone_from(x);
+        }
         let feedback = &self.coupling.feedback;
         let r = stage.resolve(&self.work.x_start, x, v, inv_mass, span.h, feedback);
         m.add_collision(&r);
+        if let Some(bound) = bound {
+            // An obstacle's answer past the bound goes to the next solve (see `super::limit`).
+            let stage = &*stage;
+            // Only the vertex pass's answers: a feature answer keeps an obstacle's edge or rod
+            // from passing between vertices, which no vertex's own way back would see.
+            let kind = |i: usize| stage.contact_kind(i, false);
+            let by_obstacle =
+                |i: usize| kind(i) == Some(crate::collide::ContactKind::ObstacleVertex);
+            let clear = |a, b| super::limit::clear_of_obstacles(stage, a, b);
+            let before = &self.work.pre_collision;
+            bound.hold_response(before, x, by_obstacle, clear);
+        }
         let after = Energies::of(&self.cloth, &self.model.effects);
         self.guard.collided(after, r.unresolved);
     }
