@@ -53,6 +53,10 @@ pub struct Friction {
     pub vertex: u32,
     pub limit: f64,
     pub reference: Vec3,
+    /// The surface's unit normal when a spring, not the filter, presses the vertex on it (a
+    /// pinch): friction then acts in that surface's tangent plane; `None`: in the filter's
+    /// free directions.
+    pub normal: Option<Vec3>,
 }
 
 /// How a vertex's friction acts during a step.
@@ -93,11 +97,19 @@ impl Drag {
         if *filter == Filter::Fixed {
             return None;
         }
+        // A free vertex pressed by a spring rubs in the surface's tangent plane; one the
+        // filter holds, in the filter's free directions.
+        let tangent = match f.normal {
+            Some(n) if *filter == Filter::Free && n.is_finite() => {
+                Mat3::IDENTITY - outer(n, n)
+            }
+            _ => filter.matrix(),
+        };
         Some(Self::with_tangent(
             f.vertex as usize,
             f.limit,
             f.reference,
-            filter.matrix(),
+            tangent,
             v,
             h_over_m,
             load,
