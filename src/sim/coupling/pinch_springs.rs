@@ -133,7 +133,15 @@ impl Coupling {
         solves_friction: bool,
         friction: &mut Vec<Friction>,
     ) -> bool {
-        let Some((share, [a, b])) = pinch_sides(stage, s, (i, tangent), pair) else {
+        let Some((share, [a, b])) = pinch_sides(stage, s, (i, tangent), pair, 0.0) else {
+            // A cell the cloth's or the pads' motion carries under the pads within the step
+            // is the pinch's too: the stage leaves its squeeze to the next solve's springs
+            // (pushed out of the pads' layers at their edges, cloth sliding in fast was
+            // stopped there).
+            let reach = s.h * (s.cloth.v[i].length() + pads_speed(s, pair));
+            if pinch_sides(stage, s, (i, tangent), pair, reach).is_some() {
+                self.feedback.squeeze(i, pair);
+            }
             return false;
         };
         let th = s.cloth.thickness[i];
@@ -225,13 +233,14 @@ fn poses(stage: &CollisionStage, s: &StartState, k: usize) -> Option<(Pose, Pose
     Some(s.obstacle_poses.get(k).copied().unwrap_or((o.pose, o.pose)))
 }
 
-/// The share of vertex `i`'s cell between the faces of the obstacles `pair` and the two sides'
-/// planes there; `None` when no part of it is.
+/// The share of vertex `i`'s cell (widened by `reach` on every side) between the faces of the
+/// obstacles `pair` and the two sides' planes there; `None` when no part of it is.
 fn pinch_sides(
     stage: &CollisionStage,
     s: &StartState,
     (i, tangent): (usize, Option<Vec3>),
     pair: [usize; 2],
+    reach: f64,
 ) -> Option<(f64, [Side; 2])> {
     let x = *s.cloth.x.get(i)?;
     let th = s.cloth.thickness[i];
@@ -257,7 +266,7 @@ fn pinch_sides(
         .unwrap_or_else(|| normal.any_orthonormal_vector());
     let t2 = normal.cross(t1);
     let area = cell_area(s, i)?;
-    let half = 0.5 * area.sqrt();
+    let half = 0.5 * area.sqrt() + reach;
     // Per line, the covered samples and their mean position; over all lines, the sums of the
     // sides' points and normals. The second line goes through the first's covered part (a
     // cell beside a pad's edge is covered on one side of the vertex only), and where the first
@@ -316,6 +325,15 @@ fn pinch_sides(
         })
     };
     Some((share, [side(0, pair[0], pa)?, side(1, pair[1], pb)?]))
+}
+
+/// The faster of the two obstacles' translations over the substep (m/s).
+fn pads_speed(s: &StartState, pair: [usize; 2]) -> f64 {
+    let speed = |k: usize| {
+        (s.obstacle_poses.get(k))
+            .map_or(0.0, |(a, b)| (b.translation - a.translation).length() / s.h.max(f64::MIN_POSITIVE))
+    };
+    speed(pair[0]).max(speed(pair[1]))
 }
 
 /// Vertex `i`'s area (m^2): its mass over its piece's areal density.
