@@ -144,6 +144,9 @@ impl Coupling {
             }
             return false;
         };
+        if std::env::var("PINCH_TRACE").is_ok() {
+            eprintln!("pinch {i} x {:.5} share {share:.4} d {:.5} {:.5}", s.cloth.x[i], a.distance, b.distance);
+        }
         let th = s.cloth.thickness[i];
         let Some(stiffness) = squeeze_stiffness(s, i).map(|k| k * share) else {
             return false;
@@ -257,23 +260,27 @@ fn pinch_sides(
             sp.signed_distance,
         )
     };
-    // The cell's tangent frame: across the first side's normal at the vertex, the first
-    // along the mesh edge `tangent` where it has a part across the normal.
-    let normal = closest(oa, &pa.0, x).1;
-    let t1 = tangent
-        .map(|t| t - normal * normal.dot(t))
+    // The cell's tangent frame: across the pinch's direction (the two sides' normals at the
+    // vertex, against each other: tilted alike beside the pads' edges, their difference is
+    // still across the gap), the first along the mesh edge `tangent`. The cell is as long as
+    // that edge along it and as wide as its area makes it across (a vertex on the cloth's
+    // border has half a cell, across the border).
+    let normal = (closest(oa, &pa.0, x).1 - closest(ob, &pb.0, x).1).try_normalize()?;
+    let along = tangent.map(|t| t - normal * normal.dot(t));
+    let t1 = along
         .and_then(Vec3::try_normalize)
         .unwrap_or_else(|| normal.any_orthonormal_vector());
     let t2 = normal.cross(t1);
     let area = cell_area(s, i)?;
-    let half = 0.5 * area.sqrt() + reach;
+    let length = along.map_or(area.sqrt(), |t| t.length()).max(f64::MIN_POSITIVE);
+    let half = [0.5 * length + reach, 0.5 * area / length + reach];
     // Per line, the covered samples and their mean position; over all lines, the sums of the
     // sides' points and normals. The second line goes through the first's covered part (a
     // cell beside a pad's edge is covered on one side of the vertex only), and where the first
     // line through the vertex missed, the first again through the second's.
     let mut sum = [(Vec3::ZERO, Vec3::ZERO); 2];
     let mut count = 0usize;
-    let mut line = |centre: Vec3, t: Vec3| -> (usize, Vec3) {
+    let mut line = |centre: Vec3, t: Vec3, half: f64| -> (usize, Vec3) {
         let (mut covered, mut at) = (0usize, Vec3::ZERO);
         for k in 0..SAMPLES {
             let offset = ((k as f64 + 0.5) / SAMPLES as f64 - 0.5) * 2.0 * half;
@@ -293,10 +300,10 @@ fn pinch_sides(
         count += covered;
         (covered, if covered > 0 { at / covered as f64 } else { centre })
     };
-    let mut first = line(x, t1);
-    let second = line(first.1, t2);
+    let mut first = line(x, t1, half[0]);
+    let second = line(first.1, t2, half[1]);
     if first.0 == 0 && second.0 > 0 {
-        first = line(second.1, t1);
+        first = line(second.1, t1, half[0]);
     }
     let covered = [first.0, second.0];
     let share = covered[0] as f64 * covered[1] as f64 / (SAMPLES * SAMPLES) as f64;
