@@ -134,18 +134,6 @@ fn run(case: Case, g: f64, seconds: f64) -> Run {
     for k in 0..steps {
         let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
         (pinched, grip) = (m.pinched_vertices, m.grip_normal_force);
-        if std::env::var("PINCH_DEBUG").is_ok() {
-            let c = com(&sim);
-            eprintln!(
-                "t {:.4} pinched {pinched} grip {grip:.3e} contacts {} speed {:.3e} com x {:.4e} v {:.4e} subdiv {} splits {}",
-                (k + 1) as f64 * sim.settings.dt, m.contacts, m.max_speed, c.0.x, c.1.x, m.subdivisions, m.contact_splits
-            );
-            for (i, (x, v)) in sim.cloth.x.iter().zip(&sim.cloth.v).enumerate() {
-                if v.length() > 0.1 {
-                    eprintln!("   {i} x {x:.5} v {v:.4}");
-                }
-            }
-        }
         let (x, v) = com(&sim);
         let t = (k + 1) as f64 * sim.settings.dt;
         if k >= steps / 2 {

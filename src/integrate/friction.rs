@@ -100,9 +100,7 @@ impl Drag {
         // A free vertex pressed by a spring rubs in the surface's tangent plane; one the
         // filter holds, in the filter's free directions.
         let tangent = match f.normal {
-            Some(n) if *filter == Filter::Free && n.is_finite() => {
-                Mat3::IDENTITY - outer(n, n)
-            }
+            Some(n) if *filter == Filter::Free && n.is_finite() => Mat3::IDENTITY - outer(n, n),
             _ => filter.matrix(),
         };
         Some(Self::with_tangent(

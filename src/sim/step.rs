@@ -175,8 +175,9 @@ impl Simulation {
                 (stage.obstacles().iter().enumerate())
                     .map(|(k, o)| span.poses(o, targets.get(k).and_then(Option::as_ref))),
             );
-            let ends: Vec<Option<crate::Pose>> =
-                (poses.iter()).map(|&(a, b)| (a != b).then_some(b)).collect();
+            let ends: Vec<Option<crate::Pose>> = (poses.iter())
+                .map(|&(a, b)| (a != b).then_some(b))
+                .collect();
             if ends.iter().any(Option::is_some) {
                 stage.aim_feature_contacts(|k| ends.get(k).copied().flatten());
             }

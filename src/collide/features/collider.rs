@@ -170,7 +170,8 @@ impl FeatureCollider {
                     let t = triangles[k as usize];
                     if t.iter().any(|&v| v as usize >= n)
                         || (only_dirty && !t.iter().any(|&v| dirty[v as usize]))
-                        || t.iter().any(|&v| is_exiting(s.exits, v as usize) || pinched(v))
+                        || t.iter()
+                            .any(|&v| is_exiting(s.exits, v as usize) || pinched(v))
                     {
                         return false;
                     }

@@ -67,14 +67,16 @@ pub(super) struct Pinch {
 impl Coupling {
     /// Pinch springs and their friction for the vertices pinched between two obstacles
     /// (`pairs`: vertex and the two obstacles, from the last pass's contacts) and for their
-    /// mesh neighbours without a contact of their own (`touching`: per vertex, whether it has
-    /// one). Returns the vertices given springs, sorted: the filter leaves them alone.
+    /// mesh neighbours without a contact of their own or touching only the same two
+    /// (`touching`: per vertex, the obstacles of its contacts, `usize::MAX` for none; beside
+    /// a pad's edge, cloth a little off the middle of the gap touches one pad's edge only).
+    /// Returns the vertices given springs, sorted: the filter leaves them alone.
     pub(super) fn pinch_springs(
         &mut self,
         stage: &CollisionStage,
         s: &StartState,
         pairs: &[(usize, [usize; 2])],
-        touching: &[bool],
+        touching: &[[usize; 2]],
         solves_friction: bool,
         friction: &mut Vec<Friction>,
     ) -> Vec<usize> {
@@ -97,13 +99,19 @@ impl Coupling {
             if t.iter().any(|&v| v >= n || v >= uv.len()) {
                 continue;
             }
-            for (a, b) in [(0, 1), (1, 2), (2, 0), (1, 0), (2, 1), (0, 2)].map(|(a, b)| (t[a], t[b])) {
+            for (a, b) in
+                [(0, 1), (1, 2), (2, 0), (1, 0), (2, 1), (0, 2)].map(|(a, b)| (t[a], t[b]))
+            {
                 let d = uv[b] - uv[a];
                 let along = d.x.abs() / (d.x.abs() + d.y.abs()).max(f64::MIN_POSITIVE);
                 if along > warp[a].1 {
                     warp[a] = (b, along);
                 }
-                if let (Some(p), false) = (pair_of[a], touching.get(b).copied().unwrap_or(true)) {
+                let within = |p: [usize; 2]| {
+                    (touching.get(b))
+                        .is_some_and(|t| t.iter().all(|o| *o == usize::MAX || p.contains(o)))
+                };
+                if let Some(p) = pair_of[a].filter(|p| pair_of[b].is_none() && within(*p)) {
                     candidates.push((b, p));
                 }
             }
@@ -144,9 +152,6 @@ impl Coupling {
             }
             return false;
         };
-        if std::env::var("PINCH_TRACE").is_ok() {
-            eprintln!("pinch {i} x {:.5} share {share:.4} d {:.5} {:.5}", s.cloth.x[i], a.distance, b.distance);
-        }
         let th = s.cloth.thickness[i];
         let Some(stiffness) = squeeze_stiffness(s, i).map(|k| k * share) else {
             return false;
@@ -272,7 +277,9 @@ fn pinch_sides(
         .unwrap_or_else(|| normal.any_orthonormal_vector());
     let t2 = normal.cross(t1);
     let area = cell_area(s, i)?;
-    let length = along.map_or(area.sqrt(), |t| t.length()).max(f64::MIN_POSITIVE);
+    let length = along
+        .map_or(area.sqrt(), |t| t.length())
+        .max(f64::MIN_POSITIVE);
     let half = [0.5 * length + reach, 0.5 * area / length + reach];
     // Per line, the covered samples and their mean position; over all lines, the sums of the
     // sides' points and normals. The second line goes through the first's covered part (a
@@ -298,7 +305,14 @@ fn pinch_sides(
             sum[1].1 += nb;
         }
         count += covered;
-        (covered, if covered > 0 { at / covered as f64 } else { centre })
+        (
+            covered,
+            if covered > 0 {
+                at / covered as f64
+            } else {
+                centre
+            },
+        )
     };
     let mut first = line(x, t1, half[0]);
     let second = line(first.1, t2, half[1]);
@@ -337,8 +351,9 @@ fn pinch_sides(
 /// The faster of the two obstacles' translations over the substep (m/s).
 fn pads_speed(s: &StartState, pair: [usize; 2]) -> f64 {
     let speed = |k: usize| {
-        (s.obstacle_poses.get(k))
-            .map_or(0.0, |(a, b)| (b.translation - a.translation).length() / s.h.max(f64::MIN_POSITIVE))
+        (s.obstacle_poses.get(k)).map_or(0.0, |(a, b)| {
+            (b.translation - a.translation).length() / s.h.max(f64::MIN_POSITIVE)
+        })
     };
     speed(pair[0]).max(speed(pair[1]))
 }

@@ -73,14 +73,18 @@ impl Coupling {
         // Vertices between two facing obstacles, and their neighbours' cells reaching under
         // the same pads: pinch springs instead of the filter (see `pinch_springs`).
         let pinched = if pinches {
-            let mut touching = vec![false; n];
+            let mut touching = vec![[usize::MAX; 2]; n];
             let mut pairs = Vec::new();
             let mut sides = Vec::new();
             for group in contacts.chunk_by(|a, b| a.vertex == b.vertex) {
                 let i = group[0].vertex;
-                touching[i] = true;
                 sides.clear();
-                sides.extend((group.iter()).filter(|c| !c.led_out).map(|c| (c.obstacle, c.normal)));
+                sides.extend(
+                    (group.iter())
+                        .filter(|c| !c.led_out)
+                        .map(|c| (c.obstacle, c.normal)),
+                );
+                touching[i] = touched(group);
                 if let Some(pair) = facing_pair(&sides) {
                     pairs.push((i, pair));
                 }
@@ -175,6 +179,23 @@ impl Coupling {
             }
         }
     }
+}
+
+/// The obstacles of one vertex's contacts `group` when there are at most two (unused slots
+/// `usize::MAX`), else `[usize::MAX - 1; 2]` (no pair holds them all): see
+/// [`Coupling::pinch_springs`].
+fn touched(group: &[VertexContact]) -> [usize; 2] {
+    let mut out = [usize::MAX; 2];
+    for c in group {
+        if out.contains(&c.obstacle) {
+            continue;
+        }
+        match out.iter_mut().find(|o| **o == usize::MAX) {
+            Some(slot) => *slot = c.obstacle,
+            None => return [usize::MAX - 1; 2],
+        }
+    }
+    out
 }
 
 /// The surfaces a vertex with the contacts `group` is held against this substep, given the
