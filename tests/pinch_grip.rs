@@ -247,3 +247,149 @@ fn a_sliding_pinched_strip_accelerates_as_load_minus_twice_mu_n_over_mass() {
     }
     assert!(failed.is_empty(), "{failed:#?}");
 }
+
+/// A towel held by one corner between two pads that then carry it sideways and up at 1 m/s.
+mod hanging {
+    use super::*;
+
+    /// Towel: 30 cm square, 250 g/m^2, 16 x 16 vertices, hanging in the x-z plane from its
+    /// corner at the pads' centre.
+    const SIZE: f64 = 0.3;
+    const RES: usize = 16;
+    const DENSITY: f64 = 0.25;
+    /// The pads: 3 cm square faces across y, centred on the towel's corner (a quarter of each
+    /// face on the towel), at this height.
+    const PAD_HALF: f64 = 0.015;
+    const PAD_Z: f64 = 1.0;
+    const HALF_DEPTH: f64 = 0.005;
+
+    fn scene(gap: f64) -> Scene {
+        let y = 0.5 * gap + HALF_DEPTH;
+        let h = PAD_HALF;
+        let pad = |name: &str, y: f64| {
+            format!(
+                r#"
+  - name: {name}
+    shape: {{ type: box, half_extents: [{h}, {HALF_DEPTH}, {h}] }}
+    pose: {{ xyz: [0, {y}, {PAD_Z}] }}
+    motion:
+      type: waypoints
+      points:
+        - {{ t: 0.0, pose: {{ xyz: [0, {y}, {PAD_Z}] }} }}
+        - {{ t: 0.2, pose: {{ xyz: [0, {y}, {PAD_Z}] }} }}
+        - {{ t: 0.4, pose: {{ xyz: [0.2, {y}, {PAD_Z}] }} }}
+        - {{ t: 0.6, pose: {{ xyz: [0.2, {y}, {z}] }} }}
+        - {{ t: 10.0, pose: {{ xyz: [0.2, {y}, {z}] }} }}"#,
+                z = PAD_Z + 0.2
+            )
+        };
+        let yaml = format!(
+            r#"
+name: pinch_hang
+duration: 1.0
+effects: [gravity, stretch, shear, bending, damping]
+solver: {{ integrator: implicit, dt: 0.004166666666666667, substeps: 1 }}
+cloths:
+  - name: towel
+    grid: {{ size: [{SIZE}, {SIZE}], resolution: [{RES}, {RES}], pose: {{ xyz: [{c}, 0, {zc}], rpy: [1.5707963267948966, 0, 0] }} }}
+    material:
+      density: {DENSITY}
+      thickness: {THICKNESS}
+      friction: {MU}
+      damping: {{ spring: 0.05, air: 0.05 }}
+obstacles:{upper}{lower}
+collision: {{ mode: continuous }}
+"#,
+            c = 0.5 * SIZE,
+            zc = PAD_Z - 0.5 * SIZE,
+            upper = pad("front", y),
+            lower = pad("back", -y),
+        );
+        Scene::from_yaml(&yaml, "pinch_hang").unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The analytic grip `2 mu N` (N) of the towel's quarter of the pads' faces at `gap`, and
+    /// the towel's weight (N).
+    fn grip_and_weight(gap: f64) -> (f64, f64) {
+        let modulus = drape::cloth::Material::default().compressive_modulus;
+        let n = modulus * PAD_HALF * PAD_HALF * (1.0 - gap / (2.0 * THICKNESS));
+        (2.0 * MU * n, DENSITY * SIZE * SIZE * 9.81)
+    }
+
+    struct Hang {
+        /// Largest distance of the pinched corner from the pads' centre over the run (m).
+        corner_drift: f64,
+        /// The towel's highest point below the pads' centre at the end (m).
+        top_below_pads: f64,
+        /// Deepest a vertex ended a step inside a pad (m; 0: none).
+        inside: f64,
+        max_stretch: f64,
+    }
+
+    fn run(gap: f64) -> Hang {
+        let mut sim = scene(gap).build().unwrap_or_else(|e| panic!("{e}"));
+        let corner = (RES - 1) * RES;
+        let steps = (1.0 / sim.settings.dt).round() as usize;
+        let mut hang = Hang {
+            corner_drift: 0.0,
+            top_below_pads: 0.0,
+            inside: 0.0,
+            max_stretch: 0.0,
+        };
+        for _ in 0..steps {
+            sim.step().unwrap_or_else(|e| panic!("{e}"));
+            let stage = sim.collision().expect("a collision stage");
+            let poses: Vec<drape::Pose> = stage.obstacles().iter().map(|o| o.pose).collect();
+            let centre = 0.5 * (poses[0].translation + poses[1].translation);
+            hang.corner_drift = hang
+                .corner_drift
+                .max((sim.cloth.x[corner] - centre).length());
+            for p in &sim.cloth.x {
+                for pose in &poses {
+                    let l = pose.inverse_transform_point(*p);
+                    let depth = (PAD_HALF - l.x.abs())
+                        .min(HALF_DEPTH - l.y.abs())
+                        .min(PAD_HALF - l.z.abs());
+                    hang.inside = hang.inside.max(depth);
+                }
+            }
+            hang.max_stretch = hang.max_stretch.max(sim.cloth.max_edge_stretch());
+            let top = sim.cloth.x.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+            hang.top_below_pads = centre.z - top;
+        }
+        hang
+    }
+
+    /// Held where the grip is three times the towel's weight, through the carry at 1 m/s;
+    /// slipping out where it is a third of it. No vertex ends a step inside a pad.
+    #[test]
+    fn a_towel_pinched_at_a_corner_is_carried_when_the_grip_exceeds_its_weight_and_slips_out_when_not() {
+        let (held_gap, slip_gap) = (0.0015, 0.00195);
+        for (gap, holds) in [(held_gap, true), (slip_gap, false)] {
+            let (grip, weight) = grip_and_weight(gap);
+            let h = run(gap);
+            eprintln!(
+                "gap {gap}: grip 2 mu N {grip:.3} N, weight {weight:.3} N; corner drift {:.4} m, \
+                 top {:.4} m below the pads, inside {:.1e} m, stretch {:.3}",
+                h.corner_drift, h.top_below_pads, h.inside, h.max_stretch
+            );
+            assert!(h.inside <= 0.0, "gap {gap}: a vertex ended {:.3e} m inside a pad", h.inside);
+            if holds {
+                assert!(grip > 2.0 * weight, "the held case must grip with margin");
+                assert!(
+                    h.corner_drift < PAD_HALF,
+                    "gap {gap}: the corner slid {:.4} m from the pads' centre",
+                    h.corner_drift
+                );
+                assert!(h.max_stretch < 0.1, "gap {gap}: stretch {:.3}", h.max_stretch);
+            } else {
+                assert!(grip < 0.5 * weight, "the slipping case must grip too weakly");
+                assert!(
+                    h.top_below_pads > 0.1,
+                    "gap {gap}: the towel's top is only {:.4} m below the pads",
+                    h.top_below_pads
+                );
+            }
+        }
+    }
+}
