@@ -263,10 +263,40 @@ mod hanging {
     const PAD_Z: f64 = 1.0;
     const HALF_DEPTH: f64 = 0.005;
 
+    /// The pads' path from their start (time, offset): still for 0.2 s, then 20 cm sideways
+    /// and 20 cm up, each with a cosine speed profile peaking at [`CARRY_SPEED`] (its largest
+    /// acceleration `pi CARRY_SPEED / T`, 0.8 g), then still; as waypoints every 10 ms.
+    fn carry_path() -> Vec<(f64, Vec3)> {
+        let reach = 0.2;
+        let t_move = 2.0 * reach / CARRY_SPEED;
+        let eased = |u: f64| reach * (u - (2.0 * std::f64::consts::PI * u).sin() / (2.0 * std::f64::consts::PI));
+        let mut path = vec![(0.0, Vec3::ZERO)];
+        let points = (2.0 * t_move / 0.01).round() as usize;
+        for k in 0..=points {
+            let t = 0.2 + k as f64 * 0.01;
+            let u = |t0: f64| ((t - t0) / t_move).clamp(0.0, 1.0);
+            path.push((t, Vec3::new(eased(u(0.2)), 0.0, eased(u(0.2 + t_move)))));
+        }
+        path.push((10.0, Vec3::new(reach, 0.0, reach)));
+        path
+    }
+
+    /// The pads' peak speed (m/s).
+    const CARRY_SPEED: f64 = 1.0;
+
     fn scene(gap: f64) -> Scene {
         let y = 0.5 * gap + HALF_DEPTH;
         let h = PAD_HALF;
         let pad = |name: &str, y: f64| {
+            let points: String = (carry_path().iter())
+                .map(|(t, p)| {
+                    format!(
+                        "\n        - {{ t: {t}, pose: {{ xyz: [{}, {y}, {}] }} }}",
+                        p.x,
+                        PAD_Z + p.z
+                    )
+                })
+                .collect();
             format!(
                 r#"
   - name: {name}
@@ -274,19 +304,13 @@ mod hanging {
     pose: {{ xyz: [0, {y}, {PAD_Z}] }}
     motion:
       type: waypoints
-      points:
-        - {{ t: 0.0, pose: {{ xyz: [0, {y}, {PAD_Z}] }} }}
-        - {{ t: 0.2, pose: {{ xyz: [0, {y}, {PAD_Z}] }} }}
-        - {{ t: 0.4, pose: {{ xyz: [0.2, {y}, {PAD_Z}] }} }}
-        - {{ t: 0.6, pose: {{ xyz: [0.2, {y}, {z}] }} }}
-        - {{ t: 10.0, pose: {{ xyz: [0.2, {y}, {z}] }} }}"#,
-                z = PAD_Z + 0.2
+      points:{points}"#
             )
         };
         let yaml = format!(
             r#"
 name: pinch_hang
-duration: 1.0
+duration: 1.2
 effects: [gravity, stretch, shear, bending, damping]
 solver: {{ integrator: implicit, dt: 0.004166666666666667, substeps: 1 }}
 cloths:
@@ -329,15 +353,21 @@ collision: {{ mode: continuous }}
     fn run(gap: f64) -> Hang {
         let mut sim = scene(gap).build().unwrap_or_else(|e| panic!("{e}"));
         let corner = (RES - 1) * RES;
-        let steps = (1.0 / sim.settings.dt).round() as usize;
+        let steps = (1.2 / sim.settings.dt).round() as usize;
         let mut hang = Hang {
             corner_drift: 0.0,
             top_below_pads: 0.0,
             inside: 0.0,
             max_stretch: 0.0,
         };
-        for _ in 0..steps {
-            sim.step().unwrap_or_else(|e| panic!("{e}"));
+        for k in 0..steps {
+            let m = sim.step().unwrap_or_else(|e| panic!("{e}"));
+            if k < 12 || k % 20 == 0 {
+                eprintln!(
+                    "TMP {k} pinched {} grip {:.3e} contacts {} corner {:.4}",
+                    m.pinched_vertices, m.grip_normal_force, m.contacts, sim.cloth.x[corner]
+                );
+            }
             let stage = sim.collision().expect("a collision stage");
             let poses: Vec<drape::Pose> = stage.obstacles().iter().map(|o| o.pose).collect();
             let centre = 0.5 * (poses[0].translation + poses[1].translation);
