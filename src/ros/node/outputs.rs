@@ -355,7 +355,10 @@ mod tests {
             .any(|kv| kv.key == "exiting_vertices" && kv.value == "40"));
         sim.exiting_vertices = 0;
         // A pinch: its vertices and grip, only while there is one.
-        assert!(!with(&sim).values.iter().any(|kv| kv.key == "pinched_vertices"));
+        assert!(!with(&sim)
+            .values
+            .iter()
+            .any(|kv| kv.key == "pinched_vertices"));
         (sim.pinched_vertices, sim.grip_normal_force) = (12, 0.25);
         let values = with(&sim).values;
         assert!(values
