@@ -77,8 +77,8 @@ pub(crate) fn obstacle_vertex(
     let mut contact: Option<(Vec3, Vec3)> = None;
     // How far from the surface the vertex is pushed: out of the contact layer, or, squeezed
     // by a pinch, out of the solid only (its depth in the layer is the cloth's compression,
-    // which the pinch's springs answered; pushed out of it, cloth sliding into a gripper
-    // stopped dead at the pads' edges).
+    // which the pinch's springs answer; pushed out of it, cloth sliding into a gripper would
+    // stop dead at the pads' edges).
     let push = if inp.squeezed { 0.0 } else { th };
 
     if inp.mode == DetectionMode::Continuous && !o.contains_local(a) {

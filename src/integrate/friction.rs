@@ -56,8 +56,8 @@ pub struct Friction {
     /// The surface's unit normal when a spring, not the filter, presses the vertex on it (a
     /// pinch): friction then acts in that surface's tangent plane, and sticks firmly (its
     /// sticking drag is `limit / STICK_SPEED` whatever the start slip: a gripper's pads
-    /// accelerate, and a drag weakened by the slip their acceleration gave let the cloth
-    /// they carry creep off under its steady weight, faster every step; a drag over the
+    /// accelerate, and a drag weakened by the slip their acceleration gives would let the
+    /// cloth they carry creep off under its steady weight, faster every step; a drag over the
     /// limit at the step's end still slides, see [`Drag::overloaded`]). `None`: in the
     /// filter's free directions.
     pub normal: Option<Vec3>,

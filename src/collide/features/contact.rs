@@ -38,8 +38,8 @@ pub(crate) struct ClothState<'a> {
     /// Per vertex (empty: none), the two obstacles pinching it (`pinch.rs`): an obstacle's
     /// features skip the faces and edges of a vertex it pinches. The cloth between a pinched
     /// vertex and the pad's edge is squeezed like the vertex (the pinch's compliance holds
-    /// it); pushed out of both pads' layers at once by their edges, it was flapped up and down
-    /// every substep and the free cloth beyond the pads gained energy.
+    /// it); pushed out of both pads' layers at once by their edges, it would be flapped up and
+    /// down every substep, and the free cloth beyond the pads would gain energy.
     pub pinched_by: &'a [Option<[usize; 2]>],
 }
 

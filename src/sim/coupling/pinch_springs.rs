@@ -5,8 +5,8 @@
 //!
 //! A vertex touching two surfaces that face each other closer than its two contact layers
 //! (`2 thickness`, the cloth's thickness in a pinch) cannot keep `thickness` from both. Held by
-//! the filter, it was a rigid constraint with no normal force of its own, so friction had
-//! nothing to grip with. Here each side is a one-sided [`ContactSpring`] on the vertex: depth
+//! the filter it would be a rigid constraint with no normal force of its own, and friction
+//! would have nothing to grip with. Here each side is a one-sided [`ContactSpring`] on the vertex: depth
 //! `d = thickness - distance` into that side's layer, force `E A f d / thickness` (the half of
 //! the cloth on that side compressed by `d`; `E` the material's `compressive_modulus`, `A` the
 //! vertex's area, `f` the share of its cell between the two faces), aimed at where the surface
@@ -15,14 +15,15 @@
 //! `N = E A f (1 - gap / (2 thickness))`. Friction is one drag per side in that side's tangent
 //! plane towards the surface's velocity, with the limit `mu N` of the start depth (see
 //! [`crate::integrate::friction`]): it sticks while the load stays under `mu (N_a + N_b)` and
-//! slides with Coulomb's force above. The vertex is not held by the filter; the collision stage
-//! still centres the vertices it finds in both layers between the surfaces after the solve (so
-//! none ends inside either side), and leaves their tangential velocity to the solve.
+//! slides with Coulomb's force above. The vertex is not held by the filter; the collision stage,
+//! told which vertices the solve squeezed ([`crate::collide::SolverFeedback::squeeze`]), keeps
+//! them out of the two solids rather than out of their layers (so none ends inside either
+//! side), leaves their velocity to the solve, and its feature passes skip their faces.
 //!
 //! The share `f` keeps the grip continuous as cloth slides through: a vertex stands for a cell
-//! of its mesh spacing, and counted whole from the moment it entered the gap a sliding strip's
-//! grip jumped by a whole column of cells at each entry (a quarter of a 2 cm pad's grip at
-//! 5 mm spacing: the strip stuck again just above the threshold). The cell's share between the
+//! of its mesh spacing, and counted whole from the moment it enters the gap a sliding strip's
+//! grip would jump by a whole column of cells at each entry (a quarter of a 2 cm pad's grip
+//! at 5 mm spacing: the strip would stick again just above the threshold). The cell's share between the
 //! faces is sampled along two tangent lines (each side's closest point a face facing the
 //! other's, both distances at most the cloth's thickness), and the mesh neighbours of the
 //! pinched vertices that touch neither side themselves (their cell reaching under the pads'
