@@ -7,6 +7,10 @@ use super::feedback::SolverFeedback;
 use super::obstacle::Obstacle;
 use crate::Vec3;
 
+/// Contact normals facing each other closer than this cosine (8 degrees off) meet two faces
+/// (the pinch's interior), not a face and an edge.
+const FACING: f64 = -0.99;
+
 /// The contacts sorted by vertex (contact order kept within a vertex), for the passes that
 /// look at all of one vertex's contacts together. A vertex on its way out of an obstacle it
 /// started inside is not pressed against that obstacle's surface: its lead-out contact stays
@@ -27,8 +31,9 @@ pub(super) fn contacts_by_vertex(contacts: &[Contact], exits: &[Exit]) -> Vec<Co
 /// step pumped energy into its springs. Put it midway between the two surfaces instead, with
 /// the normal velocity of their mean. Returns the centred vertices with their new state and
 /// the two obstacles pinching each. A vertex whose squeeze between the two the solver took
-/// (`feedback`, pinch springs of the cloth's compliance) is listed as it is, not centred: the
-/// springs balance it in the gap, and the vertex pass kept it out of both solids.
+/// (`feedback`, pinch springs of the cloth's compliance) beside the surfaces' edges (normals
+/// not [`FACING`]) is listed as it is, not centred: the springs balance it in the gap, and
+/// the vertex pass kept it out of both solids.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn center_pinched(
     obstacles: &[Obstacle],
@@ -58,7 +63,11 @@ pub(super) fn center_pinched(
         }
         let Some((_, a, b)) = best else { continue };
         let pair = [group[a].obstacle, group[b].obstacle];
-        if (feedback.squeeze_of(i)).is_some_and(|p| pair.iter().all(|o| p.contains(o))) {
+        let squeezed = (feedback.squeeze_of(i)).is_some_and(|p| pair.iter().all(|o| p.contains(o)));
+        // Squeezed beside the pads' edges (normals tilted towards each other), the vertex is
+        // left where the springs put it: centring it along one tilted normal would shove it
+        // along the pads.
+        if squeezed && group[a].normal.dot(group[b].normal) > FACING {
             pinched.push((i, x1[i], v1[i], pair));
             continue;
         }
