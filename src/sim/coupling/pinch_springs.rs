@@ -16,9 +16,10 @@
 //! plane towards the surface's velocity, with the limit `mu N` of the start depth (see
 //! [`crate::integrate::friction`]): it sticks while the load stays under `mu (N_a + N_b)` and
 //! slides with Coulomb's force above. The vertex is not held by the filter; the collision stage,
-//! told which vertices the solve squeezed ([`crate::collide::SolverFeedback::squeeze`]), keeps
-//! them out of the two solids rather than out of their layers (so none ends inside either
-//! side), leaves their velocity to the solve, and its feature passes skip their faces.
+//! told which vertices the solve squeezed ([`crate::collide::SolverFeedback::squeeze`]),
+//! centres those between two faces as it centres any pinch, keeps those beside the pads' edges
+//! out of the two solids rather than out of their layers (so none ends inside either side),
+//! leaves their tangential velocity to the solve, and its feature passes skip their faces.
 //!
 //! The share `f` keeps the grip continuous as cloth slides through: a vertex stands for a cell
 //! of its mesh spacing, and counted whole from the moment it enters the gap a sliding strip's
