@@ -28,6 +28,9 @@ pub struct SolverFeedback {
     /// The cloth faces and edges (`verts` of [`super::FeatureContact`]) the solver held with an
     /// edge spring, sorted and deduplicated.
     sprung: Vec<[u32; 3]>,
+    /// Per vertex (empty when none), the two obstacles whose squeeze of it the solver took
+    /// with pinch springs (`None`: not pinched).
+    squeezed: Vec<Option<[usize; 2]>>,
 }
 
 impl SolverFeedback {
@@ -37,6 +40,31 @@ impl SolverFeedback {
         self.held.clear();
         self.friction_solved.clear();
         self.sprung.clear();
+        self.squeezed.clear();
+    }
+
+    /// Records that the solver took the squeeze of `vertex` between `obstacles` with pinch
+    /// springs of the cloth's compliance: `resolve` keeps it out of their solids, not out of
+    /// their contact layers, and leaves its velocity to the solve.
+    pub fn squeeze(&mut self, vertex: usize, obstacles: [usize; 2]) {
+        if vertex >= self.n_vertices {
+            return;
+        }
+        if self.squeezed.len() != self.n_vertices {
+            self.squeezed.clear();
+            self.squeezed.resize(self.n_vertices, None);
+        }
+        self.squeezed[vertex] = Some(obstacles);
+    }
+
+    /// Whether the solver took `vertex`'s squeeze by `obstacle` (see [`Self::squeeze`]).
+    pub(crate) fn squeezed_by(&self, vertex: usize, obstacle: usize) -> bool {
+        (self.squeezed.get(vertex)).is_some_and(|p| p.is_some_and(|p| p.contains(&obstacle)))
+    }
+
+    /// The two obstacles whose squeeze of `vertex` the solver took, if any.
+    pub(crate) fn squeeze_of(&self, vertex: usize) -> Option<[usize; 2]> {
+        self.squeezed.get(vertex).copied().flatten()
     }
 
     /// Records that the solver held `vertex` against a surface of normal `normal`, removing the

@@ -7,7 +7,7 @@ use super::contact::Contact;
 use super::exit::{exit_of, is_exiting};
 use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
-use super::pinch::{center_pinched, contacts_by_vertex};
+use super::pinch::{center_pinched, contacts_by_vertex, pinched_by};
 use super::report::CollisionReport;
 use super::self_contact::{SelfCollider, SelfOutcome, SelfTouch};
 use super::stage::CollisionStage;
@@ -44,8 +44,9 @@ impl CollisionStage {
         self.vertex_pass(x0, x1, v1, inv_mass, h, n, feedback, None);
         let by_vertex = contacts_by_vertex(&self.contacts, &self.exits);
         let (obs, th) = (&self.obstacles, &self.thickness);
-        let pinched = center_pinched(obs, th, &by_vertex, x0, x1, v1, n);
+        let pinched = center_pinched(obs, feedback, th, &by_vertex, x0, x1, v1, n);
         separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
+        let pinched_by = pinched_by(&pinched, feedback, n);
 
         let mut report = CollisionReport {
             culled,
@@ -63,6 +64,7 @@ impl CollisionStage {
             sprung: feedback.sprung(),
             exits: &self.exits,
             slip: &self.exit_slip,
+            pinched_by: &pinched_by,
         };
         self.feature_contacts.clear();
         let mut moved = std::mem::take(&mut self.feature_moved);
@@ -93,7 +95,9 @@ impl CollisionStage {
         // along a slanted normal, the vertex pass and the centring restore only its height, and
         // the sideways part would accumulate every substep, squeezing the cloth out from under a
         // press at metres per second. Its place is the pinch's: undo the feature pass on it.
-        for &(i, x, v) in &pinched {
+        // (The feature pass skips the faces and edges of a vertex pinched by the same obstacle:
+        // the squeeze of the cloth there is the pinch's compliance, see `ClothState`.)
+        for &(i, x, v, _) in &pinched {
             (x1[i], v1[i], moved[i]) = (x, v, false);
         }
         if report.feature_contacts > 0 {
@@ -106,7 +110,7 @@ impl CollisionStage {
             }
             let by_vertex = contacts_by_vertex(&self.contacts, &self.exits);
             let (obs, th) = (&self.obstacles, &self.thickness);
-            let pinched = center_pinched(obs, th, &by_vertex, x0, x1, v1, n);
+            let pinched = center_pinched(obs, feedback, th, &by_vertex, x0, x1, v1, n);
             separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;

@@ -44,6 +44,9 @@ pub(crate) struct VertexInput {
     /// edge of it still cuts the solid) when the vertex started inside this obstacle and is on
     /// its way out (`overlap.rs`).
     pub exit: Option<(Vec3, f64, bool)>,
+    /// Whether the solver squeezed the vertex between this obstacle and another with pinch
+    /// springs (see [`super::SolverFeedback::squeeze`]).
+    pub squeezed: bool,
 }
 
 /// Detects and answers one vertex against one obstacle, updating `x` (end position) and `v`.
@@ -72,22 +75,27 @@ pub(crate) fn obstacle_vertex(
     }
     // (local contact point, local normal) of the last correction.
     let mut contact: Option<(Vec3, Vec3)> = None;
+    // How far from the surface the vertex is pushed: out of the contact layer, or, squeezed
+    // by a pinch, out of the solid only (its depth in the layer is the cloth's compression,
+    // which the pinch's springs answer; pushed out of it, cloth sliding into a gripper would
+    // stop dead at the pads' edges).
+    let push = if inp.squeezed { 0.0 } else { th };
 
     if inp.mode == DetectionMode::Continuous && !o.contains_local(a) {
         // Path in the obstacle frame: start in the pose_prev frame, end in the pose frame.
         if let Some(hit) = o.cast_local(a, p) {
             // Put the end point back on the hit face's side, `th` above its tangent plane.
             let gap = hit.normal.dot(p - hit.point);
-            if gap < th {
-                p += hit.normal * (th - gap);
+            if gap < push {
+                p += hit.normal * (push - gap);
             }
             contact = Some((hit.point, hit.normal));
         }
     }
     // Discrete proximity at the end (also catches starts inside and curved faces after a hit).
     if let Some(sp) = o.closest_local_within(p, a, th * (1.0 + REST_BAND)) {
-        if sp.signed_distance < th {
-            p += sp.normal * (th - sp.signed_distance);
+        if sp.signed_distance < push {
+            p += sp.normal * (push - sp.signed_distance);
             contact = Some((sp.point, sp.normal));
         } else if contact.is_none() && sp.signed_distance < th * (1.0 + REST_BAND) {
             // Resting exactly at `th` (where the last push or the implicit filter left it): still
@@ -105,6 +113,21 @@ pub(crate) fn obstacle_vertex(
         Vec3::ZERO
     };
     *x = o.pose.transform_point(p);
+    let contact = Contact {
+        vertex: inp.vertex,
+        normal: n,
+        surface_velocity,
+        obstacle,
+    };
+    if inp.squeezed {
+        // The solve set its velocity (springs and friction of the squeeze); only one pushed
+        // out of the solid loses its approaching velocity.
+        if p != p_solved {
+            let vn = (*v - surface_velocity).dot(n);
+            *v -= n * vn.min(0.0);
+        }
+        return Some(contact);
+    }
 
     let rel = *v - surface_velocity;
     let vn = rel.dot(n);
@@ -136,12 +159,7 @@ pub(crate) fn obstacle_vertex(
         let share = contact_share(a, p_solved, q, n_local, th);
         *x += (vt_new - vt) * (h * share);
     }
-    Some(Contact {
-        vertex: inp.vertex,
-        normal: n,
-        surface_velocity,
-        obstacle,
-    })
+    Some(contact)
 }
 
 /// The share of the step a vertex spent in contact, moving from `a` to `p` (local) against the

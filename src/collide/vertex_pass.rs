@@ -157,6 +157,7 @@ impl CollisionStage {
                                 .unwrap_or([Vec3::ZERO; 3]),
                             exit: exit_of(exits, i, oi)
                                 .map(|e| (e.dir, (e.cap - moved[i]).max(0.0), e.edge_inside)),
+                            squeezed: feedback.squeezed_by(i, oi),
                         };
                         let (mut x, mut v) = (x1r[i], v1r[i]);
                         let c = obstacle_vertex(o, oi, &input, &mut x, &mut v)?;

@@ -20,7 +20,7 @@ pub(super) fn separate_wedged(
     x1: &mut [Vec3],
     v1: &mut [Vec3],
     n: usize,
-    pinched: &[(usize, Vec3, Vec3)],
+    pinched: &[(usize, Vec3, Vec3, [usize; 2])],
 ) {
     const ROUNDS: usize = 8;
     for group in by_vertex.chunk_by(|a, b| a.vertex == b.vertex) {

@@ -53,6 +53,14 @@ pub struct Friction {
     pub vertex: u32,
     pub limit: f64,
     pub reference: Vec3,
+    /// The surface's unit normal when a spring, not the filter, presses the vertex on it (a
+    /// pinch): friction then acts in that surface's tangent plane, and sticks firmly (its
+    /// sticking drag is `limit / STICK_SPEED` whatever the start slip: a gripper's pads
+    /// accelerate, and a drag weakened by the slip their acceleration gives would let the
+    /// cloth they carry creep off under its steady weight, faster every step; a drag over the
+    /// limit at the step's end still slides, see [`Drag::overloaded`]). `None`: in the
+    /// filter's free directions.
+    pub normal: Option<Vec3>,
 }
 
 /// How a vertex's friction acts during a step.
@@ -93,15 +101,27 @@ impl Drag {
         if *filter == Filter::Fixed {
             return None;
         }
-        Some(Self::with_tangent(
+        // A free vertex pressed by a spring rubs in the surface's tangent plane; one the
+        // filter holds, in the filter's free directions.
+        let tangent = match f.normal {
+            Some(n) if *filter == Filter::Free && n.is_finite() => Mat3::IDENTITY - outer(n, n),
+            _ => filter.matrix(),
+        };
+        let mut d = Self::with_tangent(
             f.vertex as usize,
             f.limit,
             f.reference,
-            filter.matrix(),
+            tangent,
             v,
             h_over_m,
             load,
-        ))
+        );
+        if f.normal.is_some() && matches!(d.mode, Mode::Sticking { .. }) {
+            d.mode = Mode::Sticking {
+                c: f.limit / STICK_SPEED,
+            };
+        }
+        Some(d)
     }
 
     /// The drag of a contact point (`vertex` unused) moving at `u` on a static surface of unit

@@ -4,7 +4,8 @@
 //!
 //! A frame's values cover the steps since the previous frame: counts are summed (substeps,
 //! subdivisions, CG iterations), extremes are the worst over those steps (CG residual, deepest
-//! penetration), states are the frame's own (contacts, energy, edge stretch, self-intersections).
+//! penetration), states are the frame's own (contacts, pinched vertices and their grip, energy,
+//! edge stretch, self-intersections).
 //! Step wall time is left out of the bag unless asked for ([`FrameQuality::diagnostics`]'s
 //! `wall_time`): with it a bag is no longer the same bytes from run to run.
 //!
@@ -49,6 +50,10 @@ pub struct FrameQuality {
     pub strain_limited: Option<u64>,
     /// Largest elongation beyond the strain limit left after its passes (0: it held).
     pub strain_limit_excess: f64,
+    /// Vertices squeezed between two obstacles (a pinch) at the last step.
+    pub pinched_vertices: usize,
+    /// The pinch's grip normal force at the last step (N; see [`StepMetrics`]).
+    pub grip_normal_force: f64,
 }
 
 impl FrameQuality {
@@ -75,6 +80,8 @@ impl FrameQuality {
             *self.strain_limited.get_or_insert(0) += u64::from(n);
         }
         self.strain_limit_excess = self.strain_limit_excess.max(m.strain_limit_excess);
+        self.pinched_vertices = m.pinched_vertices;
+        self.grip_normal_force = m.grip_normal_force;
     }
 
     /// The next window's start: no steps yet, the state values (time, contacts, vertices on
@@ -85,6 +92,8 @@ impl FrameQuality {
             sim_time: self.sim_time,
             contacts: self.contacts,
             exiting_vertices: self.exiting_vertices,
+            pinched_vertices: self.pinched_vertices,
+            grip_normal_force: self.grip_normal_force,
             self_intersections: self.self_intersections,
             kinetic_energy: self.kinetic_energy,
             potential_energy: self.potential_energy,
@@ -224,6 +233,13 @@ pub const METRICS: &[(&str, Value)] = &[
     // Only while there are any.
     ("exiting_vertices", |q| {
         (q.exiting_vertices > 0).then(|| q.exiting_vertices.to_string())
+    }),
+    // Only while something pinches the cloth.
+    ("pinched_vertices", |q| {
+        (q.pinched_vertices > 0).then(|| q.pinched_vertices.to_string())
+    }),
+    ("grip_normal_force_n", |q| {
+        (q.pinched_vertices > 0).then(|| q.grip_normal_force.to_string())
     }),
 ];
 

@@ -140,6 +140,9 @@ pub const MAX_STIFFNESS: f64 = 1e8;
 pub const MAX_RIGIDITY: f64 = 1e4;
 pub const MAX_DAMPING: f64 = 1e6;
 pub const MAX_FRICTION: f64 = 100.0;
+/// Largest through-thickness compressive modulus (Pa): a gigapascal is a stiff plastic, far past
+/// any fabric.
+pub const MAX_MODULUS: f64 = 1e9;
 /// Largest strain limit (an edge allowed to 11 times its rest length limits nothing real).
 pub const MAX_STRAIN_LIMIT: f64 = 10.0;
 /// Largest knee strain: a fabric that stiffens only past twice its length does not stiffen.

@@ -442,6 +442,12 @@ impl Scene {
         )?;
         positive(&key("thickness"), m.thickness, 1.0, " m")?;
         non_negative(&key("friction"), m.friction, MAX_FRICTION, "")?;
+        positive(
+            &key("compressive_modulus"),
+            m.compressive_modulus,
+            MAX_MODULUS,
+            " Pa",
+        )?;
         if let Some(limit) = m.strain_limit {
             positive(&key("strain_limit"), limit, MAX_STRAIN_LIMIT, "")?;
         }

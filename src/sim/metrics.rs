@@ -55,6 +55,13 @@ pub struct StepMetrics {
     /// Largest elongation beyond the strain limit its passes left, over the substeps, as a
     /// fraction of the allowed length (0: the limit held; see `sim::limit`).
     pub strain_limit_excess: f64,
+    /// Vertices squeezed between two obstacle surfaces (a pinch: finger pads closed on cloth),
+    /// in the last substep's solve.
+    pub pinched_vertices: usize,
+    /// The pinch's grip in the last substep's solve (N): over the pinched vertices, the sum of
+    /// the mean normal force of their two sides (what each pad presses the cloth with; the
+    /// friction holding it is at most `mu` times twice this).
+    pub grip_normal_force: f64,
 }
 
 impl StepMetrics {
@@ -66,6 +73,12 @@ impl StepMetrics {
         self.cg_time_s += stats.cg_time_s;
         self.cg_flops += stats.cg_flops;
         self.cg_bytes += stats.cg_bytes;
+    }
+
+    /// Sets the last substep's pinched vertices and grip normal force (N).
+    pub(super) fn add_pinch(&mut self, (vertices, force): (usize, f64)) {
+        self.pinched_vertices = vertices;
+        self.grip_normal_force = force;
     }
 
     /// Adds one substep's strain limiting.

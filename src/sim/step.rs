@@ -168,13 +168,15 @@ impl Simulation {
     /// (filter, friction, edge springs; the edges of obstacles moving in this substep aimed at
     /// where they will be at its end); see [`super::coupling`].
     fn coupling_in(&mut self, span: Span) {
+        let mut poses = Vec::new();
         if let Some(stage) = self.collision.as_mut() {
             let targets = &self.obstacle_targets;
-            let ends: Vec<Option<crate::Pose>> = (stage.obstacles().iter().enumerate())
-                .map(|(k, o)| {
-                    let (a, b) = span.poses(o, targets.get(k).and_then(Option::as_ref));
-                    (a != b).then_some(b)
-                })
+            poses.extend(
+                (stage.obstacles().iter().enumerate())
+                    .map(|(k, o)| span.poses(o, targets.get(k).and_then(Option::as_ref))),
+            );
+            let ends: Vec<Option<crate::Pose>> = (poses.iter())
+                .map(|&(a, b)| (a != b).then_some(b))
                 .collect();
             if ends.iter().any(Option::is_some) {
                 stage.aim_feature_contacts(|k| ends.get(k).copied().flatten());
@@ -186,6 +188,7 @@ impl Simulation {
             t: span.t,
             h_scene: self.settings.substep(),
             h: span.h,
+            obstacle_poses: &poses,
         };
         let stage = self.collision.as_ref();
         let scratch = &mut self.work.scratch_f;
@@ -230,6 +233,7 @@ impl Simulation {
         let forces = w.report.contact_forces.as_slice();
         self.coupling.solved(solves_contacts.then_some(forces));
         m.add_solve(&w.report);
+        m.add_pinch(self.coupling.pinch_grip);
         let c = &self.coupling;
         guard::moving_contact_work(
             &c.constraints,

@@ -100,7 +100,7 @@ impl FeatureCollider {
         }
         let mut answered = 0;
         for pass in 0..PASSES {
-            self.detect(o, f, s, x1, pass > 0);
+            self.detect(o, obstacle, f, s, x1, pass > 0);
             if self.hits.is_empty() {
                 break;
             }
@@ -143,6 +143,7 @@ impl FeatureCollider {
     fn detect(
         &mut self,
         o: &Obstacle,
+        obstacle: usize,
         f: &Features,
         s: &ClothState,
         x1: &[Vec3],
@@ -157,6 +158,9 @@ impl FeatureCollider {
 
         let triangles = &self.triangles;
         let dirty = &self.dirty;
+        let pinched = |v: u32| {
+            (s.pinched_by.get(v as usize)).is_some_and(|p| p.is_some_and(|p| p.contains(&obstacle)))
+        };
         self.cand_tris.clear();
         self.cand_tris.par_extend(
             (0..triangles.len() as u32)
@@ -166,7 +170,8 @@ impl FeatureCollider {
                     let t = triangles[k as usize];
                     if t.iter().any(|&v| v as usize >= n)
                         || (only_dirty && !t.iter().any(|&v| dirty[v as usize]))
-                        || t.iter().any(|&v| is_exiting(s.exits, v as usize))
+                        || t.iter()
+                            .any(|&v| is_exiting(s.exits, v as usize) || pinched(v))
                     {
                         return false;
                     }
@@ -187,10 +192,11 @@ impl FeatureCollider {
         }
         self.cand_edges.sort_unstable();
         self.cand_edges.dedup();
-        if !s.exits.is_empty() {
+        if !s.exits.is_empty() || !s.pinched_by.is_empty() {
             let edges = &self.edges;
-            self.cand_edges
-                .retain(|&k| (edges[k as usize].iter()).all(|&v| !is_exiting(s.exits, v as usize)));
+            self.cand_edges.retain(|&k| {
+                (edges[k as usize].iter()).all(|&v| !is_exiting(s.exits, v as usize) && !pinched(v))
+            });
         }
         if only_dirty {
             let (edges, dirty) = (&self.edges, &self.dirty);

@@ -35,6 +35,12 @@ pub(crate) struct ClothState<'a> {
     pub exits: &'a [Exit],
     /// (vertex, obstacle) pairs without friction beside a lead-out (`exit::slip_around`).
     pub slip: &'a [(u32, u32)],
+    /// Per vertex (empty: none), the two obstacles pinching it (`pinch.rs`): an obstacle's
+    /// features skip the faces and edges of a vertex it pinches. The cloth between a pinched
+    /// vertex and the pad's edge is squeezed like the vertex (the pinch's compliance holds
+    /// it); pushed out of both pads' layers at once by their edges, it would be flapped up and
+    /// down every substep, and the free cloth beyond the pads would gain energy.
+    pub pinched_by: &'a [Option<[usize; 2]>],
 }
 
 /// A contact of an obstacle's edge, corner or rod axis with the cloth, for the implicit solver

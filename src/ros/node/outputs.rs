@@ -354,6 +354,20 @@ mod tests {
             .iter()
             .any(|kv| kv.key == "exiting_vertices" && kv.value == "40"));
         sim.exiting_vertices = 0;
+        // A pinch: its vertices and grip, only while there is one.
+        assert!(!with(&sim)
+            .values
+            .iter()
+            .any(|kv| kv.key == "pinched_vertices"));
+        (sim.pinched_vertices, sim.grip_normal_force) = (12, 0.25);
+        let values = with(&sim).values;
+        assert!(values
+            .iter()
+            .any(|kv| kv.key == "pinched_vertices" && kv.value == "12"));
+        assert!(values
+            .iter()
+            .any(|kv| kv.key == "grip_normal_force_n" && kv.value == "0.25"));
+        sim.pinched_vertices = 0;
         sim.self_intersections = Some(0);
         assert_eq!(with(&sim).level, DiagnosticStatus::OK);
         // A tangle: self-intersections, or pairs the fail-safe gave up on.

@@ -33,6 +33,7 @@ impl Coupling {
                     vertex: i as u32,
                     limit,
                     reference: *surface,
+                    normal: None,
                 });
             }
         }

@@ -21,6 +21,9 @@
 //!   moving features, with in-solve friction from their lagged end forces;
 //! - `vertex_contacts`: the filter `S = I - n n^T` of the vertices the contacts press, grouped
 //!   per vertex into the surfaces it is held against, and their normal impulses out;
+//! - `pinch_springs`: a vertex squeezed between two facing surfaces, pressed by each with a
+//!   spring of the cloth's through-thickness compliance and rubbed by each with its friction
+//!   (instead of the filter);
 //! - `held_friction`: in-solve Coulomb friction of the held vertices, one per surface, and its
 //!   lagged limits;
 //! - `arrival`: springs that stop free vertices arriving at a static solid's contact layer,
@@ -31,6 +34,7 @@ mod arrival;
 mod edge_springs;
 mod held_friction;
 mod layer_springs;
+mod pinch_springs;
 mod vertex_contacts;
 
 use super::front::Front;
@@ -39,7 +43,8 @@ use crate::collide::{Arrival, CollisionStage, HeldNormals, SolverFeedback};
 use crate::effects::EffectSet;
 use crate::integrate::{Capabilities, Constraints};
 use crate::linalg::Filter;
-use crate::Vec3;
+use crate::{Pose, Vec3};
+use pinch_springs::Pinch;
 
 /// The coupling's state: this substep's constraints and holds, the lagged forces of the last
 /// solve, and the feedback for the stage.
@@ -71,6 +76,10 @@ pub(super) struct Coupling {
     arrivals: Vec<Arrival>,
     arrival_springs: Vec<usize>,
     arrival_forces: Vec<f64>,
+    /// This substep's pinched vertices and their two springs (`pinch_springs`).
+    pinches: Vec<Pinch>,
+    /// The last solve's pinched vertices and grip (see [`Coupling::grip`]).
+    pub pinch_grip: (usize, f64),
 }
 
 /// What the coupling reads at the start of a substep.
@@ -82,6 +91,8 @@ pub(super) struct StartState<'a> {
     pub h_scene: f64,
     /// This substep.
     pub h: f64,
+    /// Each obstacle's pose at the substep's start and end (empty without a collision stage).
+    pub obstacle_poses: &'a [(Pose, Pose)],
 }
 
 impl Coupling {
@@ -119,7 +130,8 @@ impl Coupling {
         scratch: &mut Vec<Vec3>,
     ) {
         self.edge_springs(stage, s, caps);
-        self.contact_constraints(stage, s, caps.solves_friction, scratch);
+        let solves = (caps.solves_contacts, caps.solves_friction);
+        self.contact_constraints(stage, s, solves, scratch);
         self.arrival_springs(stage, s, caps);
         self.layers_from = self.constraints.contacts.len();
         self.layer_springs(stage, s, caps);
@@ -130,6 +142,7 @@ impl Coupling {
     pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
         self.spring_forces.clear();
         self.arrival_forces.clear();
+        self.pinch_grip = self.grip(contact_forces);
         if let Some(forces) = contact_forces {
             // Each arrival's normal spring (its anchor's tangential springs follow it).
             self.arrival_forces.extend(

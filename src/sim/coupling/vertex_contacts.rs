@@ -4,6 +4,7 @@
 //! impulse on each held vertex becomes the stage's friction bound for it.
 
 use super::held_friction::next_limits;
+use super::pinch_springs::facing_pair;
 use super::{Coupling, StartState};
 use crate::cloth::Cloth;
 use crate::collide::{CollisionStage, HeldNormals};
@@ -32,10 +33,13 @@ impl Coupling {
         &mut self,
         stage: Option<&CollisionStage>,
         s: &StartState,
-        solves_friction: bool,
+        (solves_contacts, solves_friction): (bool, bool),
         scratch: &mut Vec<Vec3>,
     ) {
+        // Pinch springs need a solve that takes contact springs.
+        let pinches = solves_contacts;
         self.held.clear();
+        self.pinches.clear();
         let Some(stage) = stage else {
             return;
         };
@@ -66,9 +70,35 @@ impl Coupling {
         contacts.sort_by_key(|c| c.vertex);
         self.friction_limit.resize(n, [(Vec3::ZERO, 0.0); 3]);
         let mut friction = Vec::new();
+        // Vertices between two facing obstacles, and their neighbours' cells reaching under
+        // the same pads: pinch springs instead of the filter (see `pinch_springs`).
+        let pinched = if pinches {
+            let mut touching = vec![[usize::MAX; 2]; n];
+            let mut pairs = Vec::new();
+            let mut sides = Vec::new();
+            for group in contacts.chunk_by(|a, b| a.vertex == b.vertex) {
+                let i = group[0].vertex;
+                sides.clear();
+                sides.extend(
+                    (group.iter())
+                        .filter(|c| !c.led_out)
+                        .map(|c| (c.obstacle, c.normal)),
+                );
+                touching[i] = touched(group);
+                if let Some(pair) = facing_pair(&sides) {
+                    pairs.push((i, pair));
+                }
+            }
+            self.pinch_springs(stage, s, &pairs, &touching, solves_friction, &mut friction)
+        } else {
+            Vec::new()
+        };
         for group in contacts.chunk_by(|a, b| a.vertex == b.vertex) {
             let i = group[0].vertex;
             let f = scratch[i];
+            if pinched.binary_search(&i).is_ok() {
+                continue;
+            }
             let Some(normals) = pressing_normals(group, f) else {
                 // Released, but on its way out of a solid: held again if the solve drives it
                 // back in (see `Constraints::standby`).
@@ -149,6 +179,23 @@ impl Coupling {
             }
         }
     }
+}
+
+/// The obstacles of one vertex's contacts `group` when there are at most two (unused slots
+/// `usize::MAX`), else `[usize::MAX - 1; 2]` (no pair holds them all): see
+/// [`Coupling::pinch_springs`].
+fn touched(group: &[VertexContact]) -> [usize; 2] {
+    let mut out = [usize::MAX; 2];
+    for c in group {
+        if out.contains(&c.obstacle) {
+            continue;
+        }
+        match out.iter_mut().find(|o| **o == usize::MAX) {
+            Some(slot) => *slot = c.obstacle,
+            None => return [usize::MAX - 1; 2],
+        }
+    }
+    out
 }
 
 /// The surfaces a vertex with the contacts `group` is held against this substep, given the
