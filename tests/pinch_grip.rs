@@ -394,7 +394,8 @@ collision: {{ mode: continuous }}
     /// a 3 cm pad share the towel's pull unevenly, the corner's own friction limit is below
     /// its part of the load, and it slides on); the towel falls once the pads move.
     #[test]
-    #[ignore = "the corner pinch does not hold the hanging towel yet"]
+    #[ignore = "known limit: a towel pinched at one corner with three times its weight in grip \
+                creeps out of the pads at 4 cm/s"]
     fn a_towel_pinched_at_a_corner_is_carried_when_the_grip_exceeds_its_weight_and_slips_out_when_not(
     ) {
         let (held_gap, slip_gap) = (0.0015, 0.00195);

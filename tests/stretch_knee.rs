@@ -113,7 +113,8 @@ collision: {{ mode: continuous }}
 
 /// The tarp on the turning box: with a knee at 3 %, every frame end within 1.05.
 #[test]
-#[ignore = "60 frames of a 40x40 stiff cloth on a turning box"]
+#[ignore = "known limit: the box edge's answers in the collision pass (feature contacts, not \
+            held to the bound) stretch the tarp to 1.17 at the corner, over 1.05"]
 fn a_stiff_tarp_on_a_turning_box_stays_near_its_knee() {
     let run = |knee| {
         let scene = Scene::from_yaml(&tarp(knee), "tarp").unwrap_or_else(|e| panic!("{e}"));
