@@ -1,0 +1,106 @@
+//! Material keys in the units a textile lab reports (`areal_density` in g/m^2, bending lengths
+//! in cm, `tensile` stiffness per unit width in N/m), beside the spring constants they stand in
+//! for. Both forms of one property in one material is an error naming the key; the lab's
+//! values are range-checked here, then converted ([`crate::cloth::Material::resolve_textile`])
+//! before the scene's validation sees the internal constants.
+
+use super::problem::{
+    Invalid, Problem, MAX_BENDING_LENGTH, MAX_DENSITY, MAX_STIFFNESS, MAX_STRAIN_LIMIT,
+};
+use super::Scene;
+use crate::cloth::Material;
+use serde_yaml_ng::Value;
+
+/// Each textile key and the key it stands in for.
+const PAIRS: [(&str, &str); 4] = [
+    ("areal_density", "density"),
+    ("bending_length_warp", "bend_warp"),
+    ("bending_length_weft", "bend_weft"),
+    ("tensile", "stretch"),
+];
+
+/// Refuses a material of the scene's text that gives a textile key and the key it replaces.
+/// Serde has already read the text (with its defaults), so this looks at the keys written.
+pub(super) fn check_keys(text: &str) -> Result<(), Invalid> {
+    let Ok(value) = serde_yaml_ng::from_str::<Value>(text) else {
+        return Ok(());
+    };
+    for list in ["cloths", "garments"] {
+        let Some(items) = value.get(list).and_then(Value::as_sequence) else {
+            continue;
+        };
+        for (i, item) in items.iter().enumerate() {
+            let Some(m) = item.get("material").and_then(Value::as_mapping) else {
+                continue;
+            };
+            for (textile, spring) in PAIRS {
+                if m.contains_key(textile) && m.contains_key(spring) {
+                    return Err((
+                        format!("{list}[{i}].material.{textile}"),
+                        Problem::BothKeys { other: spring },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn positive(key: String, v: f64, max: f64, unit: &'static str) -> Result<(), Invalid> {
+    if !v.is_finite() {
+        return Err((key, Problem::NotFinite { value: v }));
+    }
+    if v <= 0.0 {
+        return Err((key, Problem::NotPositive { value: v }));
+    }
+    if v > max {
+        return Err((
+            key,
+            Problem::TooLarge {
+                value: v,
+                max,
+                unit,
+            },
+        ));
+    }
+    Ok(())
+}
+
+/// Range checks of one material's textile keys (`at`: `cloths[0]`); `grid`: whether its
+/// cloth is a grid (a tensile stiffness needs one).
+fn check_values(at: &str, m: &Material, grid: bool) -> Result<(), Invalid> {
+    let key = |k: &str| format!("{at}.material.{k}");
+    if let Some(v) = m.areal_density {
+        positive(key("areal_density"), v, MAX_DENSITY * 1e3, " g/m^2")?;
+    }
+    if let Some(v) = m.bending_length_warp {
+        positive(key("bending_length_warp"), v, MAX_BENDING_LENGTH, " cm")?;
+    }
+    if let Some(v) = m.bending_length_weft {
+        positive(key("bending_length_weft"), v, MAX_BENDING_LENGTH, " cm")?;
+    }
+    if let Some(t) = m.tensile {
+        if !grid {
+            return Err((key("tensile"), Problem::NeedsGrid));
+        }
+        positive(key("tensile.warp"), t.warp, MAX_STIFFNESS, " N/m")?;
+        positive(key("tensile.weft"), t.weft, MAX_STIFFNESS, " N/m")?;
+        positive(key("tensile.strain"), t.strain, MAX_STRAIN_LIMIT, "")?;
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Checks every material's textile keys and converts them to the internal constants.
+    pub(super) fn resolve_textile(&mut self) -> Result<(), Invalid> {
+        for (i, c) in self.cloths.iter_mut().enumerate() {
+            check_values(&format!("cloths[{i}]"), &c.material, true)?;
+            c.material.resolve_textile();
+        }
+        for (i, g) in self.garments.iter_mut().enumerate() {
+            check_values(&format!("garments[{i}]"), &g.material, false)?;
+            g.material.resolve_textile();
+        }
+        Ok(())
+    }
+}
