@@ -105,9 +105,11 @@ impl Case {
     }
 
     /// The scene: the strip along x at z = 1, its first two columns pinned. Stretch and shear
-    /// are stiff enough (a tensile stiffness of 1e5 N/m per unit width against a strip's weight
-    /// of 0.2 N/m per unit width for a 10 cm overhang) that the strip's extension, about 1e-6,
-    /// cannot move the tip by a measurable part of the 2 % compared. Twist is off: a strip bent
+    /// are stiff enough that extension does not enter the comparison: a tensile stiffness of
+    /// 1e4 N/m per unit width against the strip's weight, 0.12 N/m per unit width for the 6 cm
+    /// overhang, stretches it by about 1e-5, which moves the tip by 1e-5 of the overhang
+    /// against the 2 % compared. (Much stiffer springs on these light vertices only make the
+    /// solve's linear systems harder.) Twist is off: a strip bent
     /// along its length does not twist. Air damping near the first mode's frequency brings it
     /// to rest in a few periods.
     fn scene(&self) -> String {
@@ -116,7 +118,7 @@ impl Case {
         let dv = self.width / (nv - 1) as f64;
         let size = [du * (nu - 1) as f64, self.width];
         // Per spring: a line of springs `dv` apart carries `k du` per unit strain.
-        let tensile = 1e5;
+        let tensile = 1e4;
         let k = tensile * dv / du;
         let b = self.rigidity();
         let omega = 3.516 * (b / (RHO * self.l.powi(4))).sqrt();
@@ -151,7 +153,8 @@ cloths:
     /// Runs to static equilibrium, judged from the largest distance any vertex moved over each
     /// 0.1 s: at rest once that fell below 1e-7 of the overhang, or once it decays so that the
     /// geometric tail of what is left (`moved r / (1 - r)`, `r` the last ratio of two windows,
-    /// below 0.9) is under 1e-4 of the overhang, 200 times below the tolerance. Panics if that
+    /// below 0.9) is under 1e-4 of the overhang, 200 times below the tolerance, over three
+    /// windows running. Panics if that
     /// takes longer than the scene's minute.
     fn droop(&self) -> Droop {
         let scene = Scene::from_yaml(&self.scene(), "cantilever").expect("scene is valid");
@@ -160,6 +163,7 @@ cloths:
         let window = (0.1 / sim.settings.dt).round() as usize;
         let mut last = sim.cloth.x.clone();
         let mut previous = f64::INFINITY;
+        let mut decaying = 0;
         let mut steps = 0;
         loop {
             for _ in 0..window {
@@ -176,7 +180,14 @@ cloths:
             last = sim.cloth.x.clone();
             let r = moved / previous;
             previous = moved;
-            if moved < 1e-7 * self.l || (r < 0.9 && moved * r / (1.0 - r) < 1e-4 * self.l) {
+            // The tail bound must hold three windows running: a swing's turning point can make
+            // one window short.
+            decaying = if r < 0.9 && moved * r / (1.0 - r) < 1e-4 * self.l {
+                decaying + 1
+            } else {
+                0
+            };
+            if moved < 1e-7 * self.l || decaying >= 3 {
                 break;
             }
             assert!(
