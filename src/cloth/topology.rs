@@ -326,7 +326,10 @@ mod tests {
         // where the notch is.
         let piece = rolled(9, 5, 0.2, &[(3, 4), (4, 4), (5, 4)]);
         let l = piece.panel.lattice.as_ref().expect("a lattice");
-        let area = |i, j| lattice_tributary_area(l, i, j) / (l.du * l.dv);
+        let area = |i, j| {
+            let a = lattice_tributary_area(l, i, j) / (l.du * l.dv);
+            (a * 1e12).round() / 1e12
+        };
         assert_eq!(area(4, 3), 0.5, "under the notch: a free edge");
         assert_eq!(area(3, 3), 0.5, "under the notch's end");
         assert_eq!(area(2, 3), 0.75, "the notch's inner corner");
@@ -342,6 +345,38 @@ mod tests {
                 .unwrap_or(0.0)
         };
         assert!((w(4, 3).powi(2) / w(4, 2).powi(2) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tensile_stiffness_is_shared_out_by_width() {
+        let mut piece = rolled(5, 3, 0.2, &[]);
+        piece.material.tensile = Some(crate::cloth::Tensile {
+            warp: 800.0,
+            weft: 400.0,
+            strain: 0.02,
+        });
+        let s = springs(&piece, SpringKind::Structural);
+        let k = spring_stiffness(&piece, SpringKind::Structural);
+        assert_eq!(s.len(), k.len());
+        // Pulled along the warp by a strain e, the springs leaving the edge u = 0 carry
+        // 800 e per unit of the sheet's width (0.06 m), edge springs and all; the weft's
+        // leaving v = 0 carry 400 e per unit of its width (0.1 m).
+        let uv = &piece.panel.uv;
+        for (axis, stiffness, width) in [(DVec2::X, 800.0, 0.06), (DVec2::Y, 400.0, 0.1)] {
+            let per_strain: f64 = s
+                .iter()
+                .zip(&k)
+                .filter(|(sp, _)| {
+                    let (a, b) = (uv[sp.i as usize], uv[sp.j as usize]);
+                    a.dot(axis) == 0.0 && (b - a).dot(axis) > 0.0
+                })
+                .map(|(sp, k)| k * sp.rest)
+                .sum();
+            assert!(
+                (per_strain / width / stiffness - 1.0).abs() < 1e-12,
+                "{axis}: {per_strain}"
+            );
+        }
     }
 
     #[test]

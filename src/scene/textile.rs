@@ -104,3 +104,91 @@ impl Scene {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::{Problem, Scene, SceneError};
+
+    fn scene(material: &str) -> String {
+        format!(
+            "effects: [gravity, stretch, bending]
+cloths:
+  - name: sheet
+    grid: {{ size: [1.0, 0.5], resolution: [11, 6] }}
+    material: {{ {material} }}
+"
+        )
+    }
+
+    fn refused(material: &str) -> (String, Problem) {
+        match Scene::from_yaml(&scene(material), "cloth.yaml") {
+            Err(SceneError::Value {
+                origin,
+                key,
+                problem,
+            }) => {
+                assert_eq!(origin, "cloth.yaml");
+                (key, *problem)
+            }
+            other => panic!("{material}: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn lab_units_become_the_internal_constants() {
+        let s = Scene::from_yaml(
+            &scene("areal_density: 150, bending_length_warp: 2.5, bending_length_weft: 2.0"),
+            "cloth.yaml",
+        )
+        .expect("valid");
+        let m = &s.cloths[0].material;
+        assert!((m.density - 0.150).abs() < 1e-15);
+        let w = 0.150 * 9.80665;
+        assert!((m.bend_warp / (w * 0.025f64.powi(3)) - 1.0).abs() < 1e-12);
+        assert!((m.bend_weft / (w * 0.020f64.powi(3)) - 1.0).abs() < 1e-12);
+        assert_eq!(m.areal_density, None, "converted, not kept twice");
+        // The rendered text reads back the same material.
+        let again = Scene::from_yaml(
+            &serde_yaml_ng::to_string(&s).expect("serializes"),
+            "again.yaml",
+        )
+        .expect("valid");
+        assert_eq!(again.cloths[0].material, *m);
+    }
+
+    #[test]
+    fn a_lab_key_beside_the_key_it_replaces_is_refused() {
+        for (both, key, other) in [
+            (
+                "bend_warp: 1.0e-4, bending_length_warp: 2.0",
+                "bending_length_warp",
+                "bend_warp",
+            ),
+            (
+                "density: 0.2, areal_density: 200",
+                "areal_density",
+                "density",
+            ),
+            (
+                "stretch: 1000, tensile: { warp: 800, weft: 800, strain: 0.02 }",
+                "tensile",
+                "stretch",
+            ),
+        ] {
+            let (k, p) = refused(both);
+            assert_eq!(k, format!("cloths[0].material.{key}"));
+            assert_eq!(p, Problem::BothKeys { other });
+            assert!(p.to_string().contains(other));
+        }
+    }
+
+    #[test]
+    fn lab_values_out_of_range_are_refused_by_key() {
+        let (k, _) = refused("bending_length_weft: -1");
+        assert_eq!(k, "cloths[0].material.bending_length_weft");
+        let (k, _) = refused("tensile: { warp: 800, weft: 0, strain: 0.02 }");
+        assert_eq!(k, "cloths[0].material.tensile.weft");
+        let (k, _) = refused("areal_density: .nan");
+        assert_eq!(k, "cloths[0].material.areal_density");
+    }
+}
