@@ -57,7 +57,10 @@ fn elastica_tip(l: f64, k: f64) -> (f64, f64) {
         }
         hi = lo;
     }
-    assert!(shoot(lo)[0] < 0.0 && shoot(hi)[0] >= 0.0, "no elastica found");
+    assert!(
+        shoot(lo)[0] < 0.0 && shoot(hi)[0] >= 0.0,
+        "no elastica found"
+    );
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
         if shoot(mid)[0] < 0.0 {
@@ -246,7 +249,10 @@ fn check(cases: &[Case]) {
         }
     }
     for (across, err) in worst {
-        eprintln!("{across} across: worst tip {:.2} % of the overhang", 100.0 * err);
+        eprintln!(
+            "{across} across: worst tip {:.2} % of the overhang",
+            100.0 * err
+        );
     }
     assert!(
         failed.is_empty(),
@@ -327,5 +333,9 @@ fn a_sheets_free_edges_droop_like_its_middle() {
         );
     }
     let err = ((mid.0 - ex).powi(2) + (mid.1 - ez).powi(2)).sqrt() / l;
-    assert!(err < TOLERANCE, "the sheet's middle {:.2} % from the elastica", 100.0 * err);
+    assert!(
+        err < TOLERANCE,
+        "the sheet's middle {:.2} % from the elastica",
+        100.0 * err
+    );
 }

@@ -13,7 +13,8 @@ use super::{
     Wind, WindKey,
 };
 use crate::cloth::topology::{
-    bending_stencils, clamp_edges, spring_stiffness, springs, twist_stencils, Spring, SpringKind, Stencil,
+    bending_stencils, clamp_edges, spring_stiffness, springs, twist_stencils, Spring, SpringKind,
+    Stencil,
 };
 use crate::cloth::Cloth;
 use crate::Vec3;

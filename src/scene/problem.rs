@@ -90,7 +90,9 @@ pub enum Problem {
     BothKeys { other: &'static str },
     /// A tensile stiffness per unit width on a garment: it is shared out over a grid's
     /// springs by their tributary widths, which a free triangle mesh does not have.
-    #[error("is shared out over a grid's springs; a garment's springs take `stretch` (N/m per spring)")]
+    #[error(
+        "is shared out over a grid's springs; a garment's springs take `stretch` (N/m per spring)"
+    )]
     NeedsGrid,
     #[error(transparent)]
     Garment(crate::garment::GarmentError),
