@@ -59,7 +59,8 @@ pub struct Material {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bending_length_weft: Option<f64>,
     /// Tensile stiffness per unit width, instead of `stretch`: the structural springs of a grid
-    /// get it shared out by their tributary widths (`cloth::topology::structural_stiffness`).
+    /// get it shared out by their tributary widths (`cloth::topology::spring_stiffness`), and
+    /// the scene sets `stretch` to its inner springs' constant for what reads one per cloth.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tensile: Option<Tensile>,
 }

@@ -96,6 +96,17 @@ impl Scene {
         for (i, c) in self.cloths.iter_mut().enumerate() {
             check_values(&format!("cloths[{i}]"), &c.material, true)?;
             c.material.resolve_textile();
+            // The springs take `tensile` by their widths; what reads one constant per cloth
+            // (stretch bounds, wave speeds) reads the inner springs' of the softer direction.
+            let [nu, nv] = c.grid.resolution;
+            if let (Some(t), true) = (c.material.tensile, nu >= 2 && nv >= 2) {
+                let du = c.grid.size[0] / (nu - 1) as f64;
+                let dv = c.grid.size[1] / (nv - 1) as f64;
+                let k = (t.warp * dv / du).min(t.weft * du / dv);
+                if k.is_finite() && k > 0.0 {
+                    c.material.stretch = k;
+                }
+            }
         }
         for (i, g) in self.garments.iter_mut().enumerate() {
             check_values(&format!("garments[{i}]"), &g.material, false)?;
@@ -154,6 +165,17 @@ cloths:
         )
         .expect("valid");
         assert_eq!(again.cloths[0].material, *m);
+    }
+
+    #[test]
+    fn a_tensile_stiffness_sets_the_inner_springs_constant() {
+        // 1.0 x 0.5 m on 11 x 6 vertices: du = dv = 0.1 m.
+        let s = Scene::from_yaml(
+            &scene("tensile: { warp: 800, weft: 600, strain: 0.02 }"),
+            "cloth.yaml",
+        )
+        .expect("valid");
+        assert!((s.cloths[0].material.stretch - 600.0).abs() < 1e-9);
     }
 
     #[test]
