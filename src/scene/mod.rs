@@ -377,7 +377,7 @@ impl Scene {
             key,
             problem: Box::new(problem),
         };
-        textile::check_keys(text).map_err(value_error)?;
+        Scene::check_textile_keys(text).map_err(value_error)?;
         scene.resolve_textile().map_err(value_error)?;
         scene.validate().map_err(value_error)?;
         Ok(scene)

@@ -19,33 +19,6 @@ const PAIRS: [(&str, &str); 4] = [
     ("tensile", "stretch"),
 ];
 
-/// Refuses a material of the scene's text that gives a textile key and the key it replaces.
-/// Serde has already read the text (with its defaults), so this looks at the keys written.
-pub(super) fn check_keys(text: &str) -> Result<(), Invalid> {
-    let Ok(value) = serde_yaml_ng::from_str::<Value>(text) else {
-        return Ok(());
-    };
-    for list in ["cloths", "garments"] {
-        let Some(items) = value.get(list).and_then(Value::as_sequence) else {
-            continue;
-        };
-        for (i, item) in items.iter().enumerate() {
-            let Some(m) = item.get("material").and_then(Value::as_mapping) else {
-                continue;
-            };
-            for (textile, spring) in PAIRS {
-                if m.contains_key(textile) && m.contains_key(spring) {
-                    return Err((
-                        format!("{list}[{i}].material.{textile}"),
-                        Problem::BothKeys { other: spring },
-                    ));
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
 fn positive(key: String, v: f64, max: f64, unit: &'static str) -> Result<(), Invalid> {
     if !v.is_finite() {
         return Err((key, Problem::NotFinite { value: v }));
@@ -91,6 +64,33 @@ fn check_values(at: &str, m: &Material, grid: bool) -> Result<(), Invalid> {
 }
 
 impl Scene {
+    /// Refuses a material of the scene's text that gives a textile key and the key it replaces.
+    /// Serde has already read the text (with its defaults), so this looks at the keys written.
+    pub(super) fn check_textile_keys(text: &str) -> Result<(), Invalid> {
+        let Ok(value) = serde_yaml_ng::from_str::<Value>(text) else {
+            return Ok(());
+        };
+        for list in ["cloths", "garments"] {
+            let Some(items) = value.get(list).and_then(Value::as_sequence) else {
+                continue;
+            };
+            for (i, item) in items.iter().enumerate() {
+                let Some(m) = item.get("material").and_then(Value::as_mapping) else {
+                    continue;
+                };
+                for (textile, spring) in PAIRS {
+                    if m.contains_key(textile) && m.contains_key(spring) {
+                        return Err((
+                            format!("{list}[{i}].material.{textile}"),
+                            Problem::BothKeys { other: spring },
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Checks every material's textile keys and converts them to the internal constants.
     pub(super) fn resolve_textile(&mut self) -> Result<(), Invalid> {
         for (i, c) in self.cloths.iter_mut().enumerate() {
