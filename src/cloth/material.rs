@@ -68,6 +68,22 @@ pub struct Material {
     /// [`DEFAULT_KNEE_STIFFENING`]); read only with `stretch_knee`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub knee_stiffening: Option<f64>,
+    /// Areal density as a textile lab reports it (g/m^2), instead of `density`; the scene
+    /// converts it ([`Material::resolve_textile`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub areal_density: Option<f64>,
+    /// Bending length `c` of the cantilever test along the warp (cm), instead of `bend_warp`:
+    /// `B = w c^3` with `w` the weight per unit area ([`Material::resolve_textile`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bending_length_warp: Option<f64>,
+    /// Bending length along the weft (cm), instead of `bend_weft`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bending_length_weft: Option<f64>,
+    /// Tensile stiffness per unit width, instead of `stretch`: the structural springs of a grid
+    /// get it shared out by their tributary widths (`cloth::topology::spring_stiffness`), and
+    /// the scene sets `stretch` to its inner springs' constant for what reads one per cloth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tensile: Option<Tensile>,
 }
 
 /// Stiffening past the knee where a material names `stretch_knee` alone.
@@ -79,6 +95,44 @@ impl Material {
     pub fn knee(&self) -> Option<(f64, f64)> {
         self.stretch_knee
             .map(|s| (s, self.knee_stiffening.unwrap_or(DEFAULT_KNEE_STIFFENING)))
+    }
+}
+
+/// A strip test's tensile stiffness: force per unit width over strain (N/m), warp and weft, as
+/// the secant at the strain it was measured at.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tensile {
+    /// Along the warp (u), N/m.
+    pub warp: f64,
+    /// Along the weft (v), N/m.
+    pub weft: f64,
+    /// The strain the stiffness was measured at (0.02: 2 %). Linear springs use the stiffness at
+    /// every strain; a stretch that stiffens past a knee reads where the measurement stands
+    /// against its knee from here.
+    pub strain: f64,
+}
+
+/// Standard gravity (m/s^2): bending lengths are measured under it (`B = rho g c^3`).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+impl Material {
+    /// Replaces the textile keys that have an internal equivalent by it: `areal_density` (g/m^2)
+    /// becomes `density` (kg/m^2), a bending length `c` (cm) the rigidity `B = rho g c^3` (N m)
+    /// along its direction, with `rho` the (converted) density and `g` standard gravity. Those
+    /// keys are then cleared; `tensile` stays (its springs need the grid's spacing). The scene
+    /// refuses a textile key beside the key it replaces before this runs.
+    pub fn resolve_textile(&mut self) {
+        if let Some(g_m2) = self.areal_density.take() {
+            self.density = g_m2 * 1e-3;
+        }
+        let w = self.density * STANDARD_GRAVITY;
+        if let Some(c) = self.bending_length_warp.take() {
+            self.bend_warp = w * (c * 1e-2).powi(3);
+        }
+        if let Some(c) = self.bending_length_weft.take() {
+            self.bend_weft = w * (c * 1e-2).powi(3);
+        }
     }
 }
 
@@ -104,6 +158,10 @@ impl Default for Material {
             strain_limit: None,
             stretch_knee: None,
             knee_stiffening: None,
+            areal_density: None,
+            bending_length_warp: None,
+            bending_length_weft: None,
+            tensile: None,
         }
     }
 }

@@ -8,7 +8,7 @@ mod material;
 mod panel;
 pub mod topology;
 
-pub use material::{Damping, Material, DEFAULT_KNEE_STIFFENING};
+pub use material::{Damping, Material, Tensile, DEFAULT_KNEE_STIFFENING, STANDARD_GRAVITY};
 pub use panel::{GridRegion, Lattice, Panel};
 
 use crate::{Pose, Vec3};

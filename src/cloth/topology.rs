@@ -89,16 +89,51 @@ pub fn springs(piece: &Piece, kind: SpringKind) -> Vec<Spring> {
         .collect()
 }
 
+/// Hooke's constant of each spring of `springs(piece, kind)`, in that order. The material's
+/// per-spring constant, except for the structural springs of a grid whose material gives a
+/// tensile stiffness per unit width `E` (N/m): a warp spring then stands for the width of
+/// cloth beside it, `dv / 2` for each whole cell it borders (`dv` inside, `dv / 2` on a free
+/// edge), and gets `k = E width / du`, so that a strip of any width, edges and all, stretches as
+/// the tensile stiffness says (weft springs likewise with `du` and `dv` swapped).
+pub fn spring_stiffness(piece: &Piece, kind: SpringKind) -> Vec<f64> {
+    let m = &piece.material;
+    let per_spring = |k: f64| vec![k; springs(piece, kind).len()];
+    match (kind, &piece.panel.lattice, m.tensile) {
+        (SpringKind::Structural, Some(l), Some(t)) => {
+            let whole = |ci: isize, cj: isize| whole_cell(l, ci, cj) as u8 as f64;
+            let mut k = Vec::new();
+            for j in 0..l.nv as isize {
+                for i in 0..l.nu as isize {
+                    if l.at(i, j).is_none() {
+                        continue;
+                    }
+                    if l.at(i + 1, j).is_some() {
+                        let width = 0.5 * l.dv * (whole(i, j - 1) + whole(i, j));
+                        k.push(t.warp * width / l.du);
+                    }
+                    if l.at(i, j + 1).is_some() {
+                        let width = 0.5 * l.du * (whole(i - 1, j) + whole(i, j));
+                        k.push(t.weft * width / l.dv);
+                    }
+                }
+            }
+            k
+        }
+        (SpringKind::Structural, _, _) => per_spring(m.stretch),
+        (SpringKind::Shear, _, _) => per_spring(m.shear),
+        (SpringKind::SkipOne, _, _) => per_spring(m.skip_one),
+    }
+}
+
 /// Second-difference stencils along the warp (`along_u = true`) or the weft.
+///
+/// A stencil's weight carries the square root of its vertex's tributary area
+/// ([`lattice_tributary_area`]), so a line of vertices on a free edge or a cut outline bends with
+/// the width of cloth it stands for, not a whole spacing's.
 pub fn bending_stencils(piece: &Piece, along_u: bool) -> Vec<Stencil<3>> {
     match &piece.panel.lattice {
         Some(l) => {
-            let (h, area) = if along_u {
-                (l.du, l.du * l.dv)
-            } else {
-                (l.dv, l.du * l.dv)
-            };
-            let s = area.sqrt() / (h * h);
+            let h = if along_u { l.du } else { l.dv };
             let (di, dj) = if along_u { (1, 0) } else { (0, 1) };
             let mut out = Vec::new();
             for j in 0..l.nv as isize {
@@ -108,6 +143,7 @@ pub fn bending_stencils(piece: &Piece, along_u: bool) -> Vec<Stencil<3>> {
                     else {
                         continue;
                     };
+                    let s = lattice_tributary_area(l, i, j).sqrt() / (h * h);
                     out.push(Stencil {
                         idx: [a, b, c].map(|k| piece.global(k)),
                         w: [s, -2.0 * s, s],
@@ -120,7 +156,45 @@ pub fn bending_stencils(piece: &Piece, along_u: bool) -> Vec<Stencil<3>> {
     }
 }
 
-/// Mixed-difference (twist) stencils; only lattice pieces have them.
+/// Bending at a clamp's edge, where a stencil `[a, b, c]` is centred on a held vertex `b` with
+/// one neighbour held and the other free (a strip's first two columns pinned, a gripper's pads).
+/// The two held vertices fix the slope at `b`, so the curvature there is that of a second
+/// difference through the held neighbour's mirror image across `b`: twice the stencil's
+/// one-sided difference. It bends over half a spacing (the other half is inside the clamp), so
+/// the stencil's energy doubles and its weights grow by `sqrt 2`. Without this a clamped strip
+/// droops as if its overhang were half a spacing longer.
+pub fn clamp_edges(stencils: &mut [Stencil<3>], held: impl Fn(u32) -> bool) {
+    for s in stencils {
+        let [a, b, c] = s.idx;
+        if held(b) && held(a) != held(c) {
+            s.w = s.w.map(|w| w * std::f64::consts::SQRT_2);
+        }
+    }
+}
+
+/// The rest area a lattice vertex stands for: a quarter `du dv` of each of the (up to four) cells
+/// around it that the lattice has whole (all four corners present). `du dv` inside the cloth,
+/// half of it on a free edge or a straight cut, a quarter at a corner. This is the vertex's
+/// Voronoi cell clipped to the cloth (for a lattice's right triangles it is the circumcentric
+/// split, whichever way a cell's diagonal runs).
+pub fn lattice_tributary_area(l: &Lattice, i: isize, j: isize) -> f64 {
+    let cells = [(i - 1, j - 1), (i, j - 1), (i - 1, j), (i, j)]
+        .into_iter()
+        .filter(|&(ci, cj)| whole_cell(l, ci, cj))
+        .count();
+    0.25 * cells as f64 * l.du * l.dv
+}
+
+/// Whether the lattice cell with lower corner `(i, j)` is cloth: all four corners present.
+fn whole_cell(l: &Lattice, i: isize, j: isize) -> bool {
+    l.at(i, j).is_some()
+        && l.at(i + 1, j).is_some()
+        && l.at(i, j + 1).is_some()
+        && l.at(i + 1, j + 1).is_some()
+}
+
+/// Mixed-difference (twist) stencils; only lattice pieces have them. One per whole cell, weighted
+/// by the cell's area, so cells along a free edge already carry exactly the cloth they cover.
 pub fn twist_stencils(piece: &Piece) -> Vec<Stencil<4>> {
     let Some(l) = &piece.panel.lattice else {
         return Vec::new();
@@ -188,4 +262,137 @@ fn free_mesh_bending(piece: &Piece, along_u: bool) -> Vec<Stencil<3>> {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::{Cloth, Material, Panel};
+    use crate::{Pose, Vec3};
+
+    /// A `nu x nv` sheet (spacings `du`, `dv`) rolled onto a cylinder of radius `r` about the v
+    /// axis, so every warp line has curvature `1 / r`, with the sites `holes` cut out.
+    fn rolled(nu: usize, nv: usize, r: f64, holes: &[(usize, usize)]) -> Piece {
+        let mut panel = Panel::grid("sheet", [0.1, 0.06], [nu, nv], &Pose::IDENTITY);
+        for p in panel.positions.iter_mut().zip(&panel.uv) {
+            let (u, v) = (p.1.x, p.1.y);
+            *p.0 = Vec3::new(r * (u / r).sin(), v, r * (1.0 - (u / r).cos()));
+        }
+        if let Some(l) = panel.lattice.as_mut() {
+            for &(i, j) in holes {
+                l.index[j * l.nu + i] = None;
+            }
+        }
+        let mut cloth = Cloth::new();
+        cloth.add_panel(panel, Material::default());
+        cloth.pieces.remove(0)
+    }
+
+    /// Bending energy per unit rigidity of the warp stencils, summed per weft line `j`.
+    fn energy_per_line(piece: &Piece) -> Vec<f64> {
+        let l = piece.panel.lattice.as_ref().expect("a lattice");
+        let mut e = vec![0.0; l.nv];
+        for s in bending_stencils(piece, true) {
+            let d: Vec3 = (0..3)
+                .map(|k| piece.panel.positions[s.idx[k] as usize] * s.w[k])
+                .sum();
+            e[s.idx[1] as usize / l.nu] += 0.5 * d.length_squared();
+        }
+        e
+    }
+
+    #[test]
+    fn free_edges_bend_with_their_half_spacing() {
+        let r = 0.2;
+        let piece = rolled(21, 7, r, &[]);
+        let l = piece.panel.lattice.as_ref().expect("a lattice");
+        // Each line's stencils cover its bent length (nu - 2) du; a line stands for dv of the
+        // sheet inside and dv / 2 on an edge.
+        let length = (l.nu - 2) as f64 * l.du;
+        let per_area = 0.5 / (r * r);
+        for (j, e) in energy_per_line(&piece).into_iter().enumerate() {
+            let width = if j == 0 || j == l.nv - 1 { 0.5 } else { 1.0 } * l.dv;
+            let density = e / (length * width);
+            assert!(
+                (density / per_area - 1.0).abs() < 1e-3,
+                "line {j}: {density} per unit area against {per_area}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_cut_outline_bends_with_the_cloth_left_around_it() {
+        // A notch cut from the middle of the top edge: the line below it becomes a free edge
+        // where the notch is.
+        let piece = rolled(9, 5, 0.2, &[(3, 4), (4, 4), (5, 4)]);
+        let l = piece.panel.lattice.as_ref().expect("a lattice");
+        let area = |i, j| {
+            let a = lattice_tributary_area(l, i, j) / (l.du * l.dv);
+            (a * 1e12).round() / 1e12
+        };
+        assert_eq!(area(4, 3), 0.5, "under the notch: a free edge");
+        assert_eq!(area(3, 3), 0.5, "under the notch's end");
+        assert_eq!(area(2, 3), 0.75, "the notch's inner corner");
+        assert_eq!(area(2, 4), 0.25, "a convex corner the cut made");
+        assert_eq!(area(4, 2), 1.0, "inside");
+        assert_eq!(area(0, 0), 0.25, "the sheet's corner");
+        // The stencils carry it: the one under the notch has half the energy of one inside.
+        let w = |i: u32, j: u32| {
+            bending_stencils(&piece, true)
+                .into_iter()
+                .find(|s| s.idx[1] == piece.global(l.at(i as isize, j as isize).unwrap_or(0)))
+                .map(|s| s.w[0])
+                .unwrap_or(0.0)
+        };
+        assert!((w(4, 3).powi(2) / w(4, 2).powi(2) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tensile_stiffness_is_shared_out_by_width() {
+        let mut piece = rolled(5, 3, 0.2, &[]);
+        piece.material.tensile = Some(crate::cloth::Tensile {
+            warp: 800.0,
+            weft: 400.0,
+            strain: 0.02,
+        });
+        let s = springs(&piece, SpringKind::Structural);
+        let k = spring_stiffness(&piece, SpringKind::Structural);
+        assert_eq!(s.len(), k.len());
+        // Pulled along the warp by a strain e, the springs leaving the edge u = 0 carry
+        // 800 e per unit of the sheet's width (0.06 m), edge springs and all; the weft's
+        // leaving v = 0 carry 400 e per unit of its width (0.1 m).
+        let uv = &piece.panel.uv;
+        for (axis, stiffness, width) in [(DVec2::X, 800.0, 0.06), (DVec2::Y, 400.0, 0.1)] {
+            let per_strain: f64 = s
+                .iter()
+                .zip(&k)
+                .filter(|(sp, _)| {
+                    let (a, b) = (uv[sp.i as usize], uv[sp.j as usize]);
+                    a.dot(axis) == 0.0 && (b - a).dot(axis) > 0.0
+                })
+                .map(|(sp, k)| k * sp.rest)
+                .sum();
+            assert!(
+                (per_strain / width / stiffness - 1.0).abs() < 1e-12,
+                "{axis}: {per_strain}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_clamps_edge_bends_with_its_mirror_image() {
+        let piece = rolled(6, 2, 0.2, &[]);
+        let mut st = bending_stencils(&piece, true);
+        let before = st.clone();
+        // Columns 0 and 1 held: the stencils centred on column 1 are the clamp's edge.
+        clamp_edges(&mut st, |v| v % 6 < 2);
+        for (a, b) in st.iter().zip(&before) {
+            let f = if a.idx[1] % 6 == 1 {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
+            assert_eq!(a.w, b.w.map(|w| w * f));
+        }
+    }
 }

@@ -14,7 +14,8 @@ use super::{
     Wind, WindKey,
 };
 use crate::cloth::topology::{
-    bending_stencils, springs, twist_stencils, Spring, SpringKind, Stencil,
+    bending_stencils, clamp_edges, spring_stiffness, springs, twist_stencils, Spring, SpringKind,
+    Stencil,
 };
 use crate::cloth::Cloth;
 use crate::Vec3;
@@ -228,20 +229,16 @@ impl Elements for Lattice<'_> {
         };
         let mut out = Vec::new();
         for (i, p) in self.0.pieces.iter().enumerate() {
-            let k = match kind {
-                SpringKind::Structural => p.material.stretch,
-                SpringKind::Shear => p.material.shear,
-                SpringKind::SkipOne => p.material.skip_one,
-            };
             let s = springs(p, kind);
+            let k = spring_stiffness(p, kind);
             // The lattice's edges and diagonals stiffen; skip-one springs stand in for bending.
             let knee = match (kind, p.material.knee()) {
                 (SpringKind::SkipOne, _) | (_, None) => Vec::new(),
                 (_, Some((strain, ratio))) => vec![Some(Knee { strain, ratio }); s.len()],
             };
-            if k > 0.0 && !s.is_empty() {
+            if k.iter().any(|&k| k > 0.0) && !s.is_empty() {
                 out.push(SpringGroup {
-                    k: vec![k; s.len()],
+                    k,
                     springs: s,
                     parameter: material_key(i, name),
                     knee,
@@ -257,7 +254,8 @@ impl Elements for Lattice<'_> {
             let mut g = StencilGroup::default();
             for (along_u, b) in [(true, p.material.bend_warp), (false, p.material.bend_weft)] {
                 if b > 0.0 {
-                    let s = bending_stencils(p, along_u);
+                    let mut s = bending_stencils(p, along_u);
+                    clamp_edges(&mut s, |v| self.0.is_kinematic(v));
                     g.rigidity.extend(std::iter::repeat_n(b, s.len()));
                     g.stencils.extend(s);
                 }

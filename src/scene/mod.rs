@@ -14,6 +14,7 @@ mod build;
 mod error;
 pub mod lint;
 mod problem;
+mod textile;
 mod validate;
 
 pub use error::{NameKind, SceneError};
@@ -371,13 +372,14 @@ impl Scene {
                 source,
             })?;
         scene.origin = origin.to_string();
-        scene
-            .validate()
-            .map_err(|(key, problem)| SceneError::Value {
-                origin: origin.to_string(),
-                key,
-                problem: Box::new(problem),
-            })?;
+        let value_error = |(key, problem)| SceneError::Value {
+            origin: origin.to_string(),
+            key,
+            problem: Box::new(problem),
+        };
+        Scene::check_textile_keys(text).map_err(value_error)?;
+        scene.resolve_textile().map_err(value_error)?;
+        scene.validate().map_err(value_error)?;
         Ok(scene)
     }
 

@@ -87,6 +87,15 @@ pub enum Problem {
     Length { found: usize, expected: usize },
     #[error("has no effect without {needs}")]
     Without { needs: &'static str },
+    /// A textile-lab key beside the spring-constant key it stands in for.
+    #[error("gives the same property as `{other}`: give one of the two")]
+    BothKeys { other: &'static str },
+    /// A tensile stiffness per unit width on a garment: it is shared out over a grid's
+    /// springs by their tributary widths, which a free triangle mesh does not have.
+    #[error(
+        "is shared out over a grid's springs; a garment's springs take `stretch` (N/m per spring)"
+    )]
+    NeedsGrid,
     #[error(transparent)]
     Garment(crate::garment::GarmentError),
     #[error(transparent)]
@@ -138,6 +147,9 @@ pub const MAX_ITERATIONS: u64 = 100_000;
 pub const MAX_DENSITY: f64 = 1e4;
 pub const MAX_STIFFNESS: f64 = 1e8;
 pub const MAX_RIGIDITY: f64 = 1e4;
+/// Longest bending length (cm): a 10 m cantilever of cloth stands straight out; nothing a
+/// textile lab measures comes near.
+pub const MAX_BENDING_LENGTH: f64 = 1e3;
 pub const MAX_DAMPING: f64 = 1e6;
 pub const MAX_FRICTION: f64 = 100.0;
 /// Largest through-thickness compressive modulus (Pa): a gigapascal is a stiff plastic, far past

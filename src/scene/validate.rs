@@ -426,7 +426,9 @@ impl Scene {
                 non_negative(&key(name), v, MAX_STIFFNESS, " N/m")
             }
         };
-        needs(EffectKind::Stretch, m.stretch, "stretch")?;
+        if m.tensile.is_none() {
+            needs(EffectKind::Stretch, m.stretch, "stretch")?;
+        }
         needs(EffectKind::Shear, m.shear, "shear")?;
         needs(EffectKind::SkipOne, m.skip_one, "skip_one")?;
         non_negative(&key("bend_warp"), m.bend_warp, MAX_RIGIDITY, " N m")?;
