@@ -57,6 +57,12 @@ pub(super) struct Coupling {
     /// Indices into `constraints.contacts` from which the springs hold cloth layers apart
     /// (`layer_springs`); the obstacles' come before.
     layers_from: usize,
+    /// The last substep's layer springs (vertex, then the face's vertices) and their end
+    /// forces (N), sorted: the normal forces of their friction next substep.
+    layer_forces: Vec<([u32; 4], f64)>,
+    /// Vertices whose cloth-cloth friction in the last solve slid (see
+    /// [`Coupling::layer_slipping`]).
+    layer_slipping: usize,
     /// What the solver did this substep, for the stage's `resolve`.
     pub feedback: SolverFeedback,
     /// Indices into `constraints.contacts` of the springs on moving features: they do work on
@@ -130,7 +136,16 @@ impl Coupling {
     pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
         self.spring_forces.clear();
         self.arrival_forces.clear();
+        self.layer_forces.clear();
         if let Some(forces) = contact_forces {
+            let layers = self.constraints.contacts.iter().zip(forces);
+            self.layer_forces.extend(
+                layers
+                    .skip(self.layers_from)
+                    .map(|(c, f)| (c.verts, *f))
+                    .filter(|(_, f)| *f > 0.0),
+            );
+            self.layer_forces.sort_by_key(|a| a.0);
             // Each arrival's normal spring (its anchor's tangential springs follow it).
             self.arrival_forces.extend(
                 (self.arrival_springs.iter()).map(|&k| forces.get(k).copied().unwrap_or(0.0)),
