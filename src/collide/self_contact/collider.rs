@@ -48,6 +48,9 @@ pub(crate) struct SelfCollider {
     /// The pairs of two layers this substep's repulsion answered (see [`super::SelfTouch`]).
     pub(super) touches: Vec<SelfTouch>,
     pub(super) w: Vec<f64>,
+    /// Inverse masses without the obstacle-contact weighting of `w`: friction's impulses are
+    /// distributed by these, equal and opposite on the two layers.
+    pub(super) w_true: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
     pub(super) in_zone: Vec<bool>,
@@ -111,6 +114,7 @@ impl SelfCollider {
             near_kept_valid: false,
             touches: Vec::new(),
             w: Vec::new(),
+            w_true: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),
             in_zone: Vec::new(),
