@@ -57,9 +57,10 @@ pub(super) struct Coupling {
     /// Indices into `constraints.contacts` from which the springs hold cloth layers apart
     /// (`layer_springs`); the obstacles' come before.
     layers_from: usize,
-    /// The last substep's layer springs (vertex, then the face's vertices) and their end
-    /// forces (N), sorted: the normal forces of their friction next substep.
-    layer_forces: Vec<([u32; 4], f64)>,
+    /// Per vertex, the end forces (N) of the last substep's layer springs on it as their
+    /// vertex (summed over its faces), sorted: the normal force of its friction next substep,
+    /// kept by the vertex as it slides from face to face.
+    layer_forces: Vec<(u32, f64)>,
     /// Vertices whose cloth-cloth friction in the last solve slid (see
     /// [`Coupling::layer_slipping`]).
     layer_slipping: usize,
@@ -142,10 +143,17 @@ impl Coupling {
             self.layer_forces.extend(
                 layers
                     .skip(self.layers_from)
-                    .map(|(c, f)| (c.verts, *f))
+                    .map(|(c, f)| (c.verts[0], *f))
                     .filter(|(_, f)| *f > 0.0),
             );
             self.layer_forces.sort_by_key(|a| a.0);
+            self.layer_forces.dedup_by(|b, a| {
+                let same = a.0 == b.0;
+                if same {
+                    a.1 += b.1;
+                }
+                same
+            });
             // Each arrival's normal spring (its anchor's tangential springs follow it).
             self.arrival_forces.extend(
                 (self.arrival_springs.iter()).map(|&k| forces.get(k).copied().unwrap_or(0.0)),
