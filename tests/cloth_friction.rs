@@ -39,9 +39,10 @@ fn step(sim: &mut Simulation) -> drape::sim::StepMetrics {
 
 /// A 0.12 m cloth (6x6) resting on a 1 m cloth tilted by `theta` about x and pinned whole (a
 /// rigid incline of cloth), both with Coulomb coefficient `mu`, no air drag. Returns the small
-/// cloth's centre-of-mass displacement down the slope over `[t1, t2]` and its acceleration
-/// down the slope over that window, from its momentum at `t1` and `t2`.
-fn incline(theta: f64, mu: f64, t1: f64, t2: f64) -> (f64, f64) {
+/// cloth's centre-of-mass displacement down the slope over `[t1, t2]`, its acceleration down
+/// the slope over that window, from its momentum at `t1` and `t2`, and the slipping vertices
+/// the step at `t2` reports.
+fn incline(theta: f64, mu: f64, t1: f64, t2: f64) -> (f64, f64, usize) {
     let thickness = 0.004;
     // The small cloth starts at rest 2.5 contact distances (two thicknesses) above the
     // incline's plane and drops onto it. Started within `pi/2` contact distances, the pair
@@ -77,9 +78,9 @@ collision: {{ mode: continuous, self_collision: true, count_self_intersections: 
     let dt = sim.settings.dt;
     let (k1, k2) = ((t1 / dt).round() as usize, (t2 / dt).round() as usize);
     let down = -up_slope;
-    let (mut c1, mut p1) = (Vec3::ZERO, Vec3::ZERO);
+    let (mut c1, mut p1, mut slipping) = (Vec3::ZERO, Vec3::ZERO, 0);
     for frame in 1..=k2 {
-        step(&mut sim);
+        slipping = step(&mut sim).slipping_vertices;
         if frame == k1 {
             (c1, p1, _) = piece_state(&sim, 1);
         }
@@ -87,7 +88,7 @@ collision: {{ mode: continuous, self_collision: true, count_self_intersections: 
     let (c2, p2, m) = piece_state(&sim, 1);
     let window = (k2 - k1) as f64 * dt;
     let accel = (p2 - p1).dot(down) / m / window;
-    ((c2 - c1).dot(down), accel)
+    ((c2 - c1).dot(down), accel, slipping)
 }
 
 /// Coulomb's threshold and sliding law on a cloth incline, `mu` 0.5 (`tan(theta) = mu` at
@@ -96,27 +97,34 @@ collision: {{ mode: continuous, self_collision: true, count_self_intersections: 
 /// start, it stays on the incline for that window). Staying means moving less than in-solve
 /// friction's creep allows: a sticking pair's drag is `mu N / STICK_SPEED` per m/s, so under a
 /// load below `mu N` it creeps under 0.1 mm/s, 0.04 mm over the window; 1 mm is well above
-/// that and 20 times below the slide at 30 degrees.
+/// that and 20 times below the slide at 30 degrees. The steps report no slipping vertex on the
+/// cloth that stays, and some on the one that slides.
 #[test]
 fn cloth_on_a_cloth_incline_sticks_below_tan_theta_mu_and_slides_with_coulombs_acceleration() {
     let mu = 0.5;
     let (t1, t2) = (0.3, 0.7);
     for degrees in [20.0_f64, 24.0] {
-        let (moved, accel) = incline(degrees.to_radians(), mu, t1, t2);
-        eprintln!("{degrees} deg: moved {moved:.6} m, acceleration {accel:.4} m/s^2");
+        let (moved, accel, slipping) = incline(degrees.to_radians(), mu, t1, t2);
+        eprintln!(
+            "{degrees} deg: moved {moved:.6} m, acceleration {accel:.4} m/s^2, {slipping} slipping"
+        );
         assert!(
-            moved.abs() < 1e-3,
-            "at {degrees} degrees (tan < mu) the cloth moved {moved:.5} m"
+            moved.abs() < 1e-3 && slipping == 0,
+            "at {degrees} degrees (tan < mu) the cloth moved {moved:.5} m, {slipping} vertices slipping"
         );
     }
     for degrees in [30.0_f64, 35.0] {
         let theta = degrees.to_radians();
         let expect = G * (theta.sin() - mu * theta.cos());
-        let (moved, accel) = incline(theta, mu, t1, t2);
-        eprintln!("{degrees} deg: moved {moved:.4} m, acceleration {accel:.4} (analytic {expect:.4}) m/s^2");
+        let (moved, accel, slipping) = incline(theta, mu, t1, t2);
+        eprintln!(
+            "{degrees} deg: moved {moved:.4} m, acceleration {accel:.4} (analytic {expect:.4}) \
+             m/s^2, {slipping} slipping"
+        );
         assert!(
-            (accel - expect).abs() <= 0.05 * expect,
-            "at {degrees} degrees: acceleration {accel:.4} m/s^2, Coulomb's {expect:.4}"
+            (accel - expect).abs() <= 0.05 * expect && slipping > 0,
+            "at {degrees} degrees: acceleration {accel:.4} m/s^2, Coulomb's {expect:.4}; \
+             {slipping} vertices slipping"
         );
     }
 }

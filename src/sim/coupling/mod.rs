@@ -37,7 +37,7 @@ use super::front::Front;
 use crate::cloth::Cloth;
 use crate::collide::{Arrival, CollisionStage, HeldNormals, SolverFeedback};
 use crate::effects::EffectSet;
-use crate::integrate::{Capabilities, Constraints};
+use crate::integrate::{Capabilities, Constraints, STICK_SPEED};
 use crate::linalg::Filter;
 use crate::Vec3;
 
@@ -61,9 +61,9 @@ pub(super) struct Coupling {
     /// vertex (summed over its faces), sorted: the normal force of its friction next substep,
     /// kept by the vertex as it slides from face to face.
     layer_forces: Vec<(u32, f64)>,
-    /// Vertices whose cloth-cloth friction in the last solve slid (see
-    /// [`Coupling::layer_slipping`]).
-    layer_slipping: usize,
+    /// Vertices whose cloth-cloth friction in the last solve ended slipping (see
+    /// [`Coupling::solved`]).
+    pub layer_slipping: usize,
     /// What the solver did this substep, for the stage's `resolve`.
     pub feedback: SolverFeedback,
     /// Indices into `constraints.contacts` of the springs on moving features: they do work on
@@ -133,8 +133,33 @@ impl Coupling {
     }
 
     /// The solve is done: its edge springs' end forces (`None` when it does not solve them)
-    /// are the normal forces of their friction next substep.
-    pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
+    /// are the normal forces of their friction next substep. `v`, the end velocities, gives
+    /// the vertices whose layer friction ended slipping: a vertex over another layer's face,
+    /// its spring pressed and its friction acting, moving over the face faster than
+    /// [`STICK_SPEED`] (counted once per vertex).
+    pub fn solved(&mut self, contact_forces: Option<&[f64]>, v: &[Vec3]) {
+        self.layer_slipping = 0;
+        if let Some(forces) = contact_forces {
+            let mut last = None;
+            for (c, f) in self
+                .constraints
+                .contacts
+                .iter()
+                .zip(forces)
+                .skip(self.layers_from)
+            {
+                let u = c.point_velocity(v);
+                let slip = u - c.normal * c.normal.dot(u);
+                if *f > 0.0
+                    && c.friction > 0.0
+                    && slip.length() > STICK_SPEED
+                    && last != Some(c.verts[0])
+                {
+                    self.layer_slipping += 1;
+                    last = Some(c.verts[0]);
+                }
+            }
+        }
         self.spring_forces.clear();
         self.arrival_forces.clear();
         self.layer_forces.clear();
