@@ -249,3 +249,36 @@ collision: { mode: continuous, self_collision: true, count_self_intersections: t
         "the layers hardly met: {repulsions} repulsions, lower cloth's momentum {lower:?}"
     );
 }
+
+/// Without friction anywhere (towel, napkin and table at 0), nothing can push the two cloths
+/// sideways as a whole: the table's normal is vertical, and every cloth-cloth impulse and force
+/// is equal and opposite. Their total horizontal momentum stays zero (to the solves' tolerance,
+/// bounded here by 1e-3 of the napkin's momentum as it lands) while the napkin lands tilted and
+/// settles; a tilted response that the obstacle is made to carry (heavier towel vertices on the
+/// table) would leave the pair sliding off together. The napkin's own horizontal travel is
+/// printed: what it gets from landing tilted on a frictionless towel.
+#[test]
+fn without_friction_a_tilted_landing_leaves_the_layers_no_net_sideways_momentum() {
+    let mut sim = build(&napkin_yaml(0.0), "napkin_on_towel");
+    let dt = sim.settings.dt;
+    let mut landing: f64 = 0.0;
+    let mut worst: f64 = 0.0;
+    let start = piece_state(&sim, 1).0;
+    for _ in 0..(1.8 / dt).round() as usize {
+        step(&mut sim);
+        let (napkin, towel) = (piece_state(&sim, 1).1, piece_state(&sim, 0).1);
+        landing = landing.max(napkin.length());
+        let sideways = Vec3::new(napkin.x + towel.x, napkin.y + towel.y, 0.0);
+        worst = worst.max(sideways.length());
+    }
+    let moved = piece_state(&sim, 1).0 - start;
+    eprintln!(
+        "largest total sideways momentum {worst:.3e} N s against {landing:.3e} N s landing; \
+         napkin moved {:.4} m sideways",
+        Vec3::new(moved.x, moved.y, 0.0).length()
+    );
+    assert!(
+        worst <= 1e-3 * landing,
+        "the layers gained {worst:.3e} N s sideways (landing momentum {landing:.3e} N s)"
+    );
+}
