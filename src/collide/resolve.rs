@@ -224,6 +224,7 @@ impl CollisionStage {
             sc.touches(),
             &self.self_touches,
             &x1[..n],
+            |v| sc.faces_around(v),
             &mut touches,
         );
         self.touches_next = std::mem::replace(&mut self.self_touches, touches);

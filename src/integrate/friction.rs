@@ -235,6 +235,21 @@ impl Drag {
     }
 }
 
+impl Drag {
+    /// [`Drag::refit`] for two cloth layers' contact point, whose drag is fitted with no load
+    /// (`at_point`): a sticker still slipping faster than [`STICK_SPEED`] at the end of the step
+    /// did not stick, so it slides. Without a load a slow slider is fitted as a sticker of drag
+    /// `mu N / |s|`, which a load (gravity down an incline) keeps from stopping: its force falls
+    /// with the slip, and a cloth slid down a cloth incline that Coulomb holds.
+    pub fn refit_unloaded(&self, v: Vec3) -> Option<Mode> {
+        let slip = self.slip(v);
+        match self.mode {
+            Mode::Sticking { .. } if slip.length() > STICK_SPEED => Some(self.sliding(slip)),
+            _ => self.refit(v),
+        }
+    }
+}
+
 /// Adds `h (-df/dv)` of every drag to the diagonal blocks of `a`.
 pub(crate) fn add_to_matrix(a: &mut BlockCsr, drags: &[Drag], h: f64) {
     for d in drags {

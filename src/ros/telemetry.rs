@@ -37,6 +37,8 @@ pub struct FrameQuality {
     pub unresolved_contacts: usize,
     /// Vertices still on their way out of an obstacle the cloth started inside (last step).
     pub exiting_vertices: usize,
+    /// Cloth-cloth contacts whose friction slid (last step; see `StepMetrics`).
+    pub slipping_vertices: usize,
     pub deepest_penetration: f64,
     /// Largest relative edge stretch at the frame (0 at rest length).
     pub max_edge_stretch: f64,
@@ -71,6 +73,7 @@ impl FrameQuality {
         self.contacts = m.contacts;
         self.unresolved_contacts = m.unresolved_contacts;
         self.exiting_vertices = m.exiting_vertices;
+        self.slipping_vertices = m.slipping_vertices;
         self.deepest_penetration = self.deepest_penetration.max(m.deepest_penetration);
         self.self_intersections = m.self_intersections;
         self.kinetic_energy = m.kinetic_energy;
@@ -240,6 +243,10 @@ pub const METRICS: &[(&str, Value)] = &[
     }),
     ("grip_normal_force_n", |q| {
         (q.pinched_vertices > 0).then(|| q.grip_normal_force.to_string())
+    }),
+    // Only while cloth slides on cloth.
+    ("slipping_vertices", |q| {
+        (q.slipping_vertices > 0).then(|| q.slipping_vertices.to_string())
     }),
 ];
 

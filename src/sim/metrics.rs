@@ -49,6 +49,10 @@ pub struct StepMetrics {
     pub exiting_vertices: usize,
     /// Cloth-cloth counts summed over the substeps (largest zone: the largest seen).
     pub self_contact: SelfContactReport,
+    /// Cloth-cloth contacts whose friction slid in the step's last substep: vertices over
+    /// another layer's face whose in-solve friction ended slipping, plus the pairs the
+    /// collision pass's impulses left sliding at their Coulomb limit.
+    pub slipping_vertices: usize,
     /// Edges the strain limit shortened after the solves, summed over the substeps (`None`:
     /// no material sets `strain_limit`).
     pub strain_limited: Option<u32>,
@@ -101,5 +105,6 @@ impl StepMetrics {
         self.culled_obstacles = r.culled;
         self.exiting_vertices = r.exiting;
         self.self_contact.add(&r.self_contact);
+        self.slipping_vertices += r.self_contact.slipping;
     }
 }

@@ -231,9 +231,11 @@ impl Simulation {
         (self.integrator).step_into(&d, span.t, span.h, start, x, v, &mut w.report);
         let solves_contacts = self.model.caps.solves_contacts;
         let forces = w.report.contact_forces.as_slice();
-        self.coupling.solved(solves_contacts.then_some(forces));
+        self.coupling
+            .solved(solves_contacts.then_some(forces), &self.cloth.v);
         m.add_solve(&w.report);
         m.add_pinch(self.coupling.pinch_grip);
+        m.slipping_vertices = self.coupling.layer_slipping;
         let c = &self.coupling;
         guard::moving_contact_work(
             &c.constraints,

@@ -54,9 +54,9 @@ impl SelfCollider {
         let mut found = std::mem::take(&mut self.found);
         {
             let this = &*self;
-            let (xr, vr): (&[Vec3], &[Vec3]) = (x1, v1);
+            let xr: &[Vec3] = x1;
             let answer = |h: Option<(Stencil, Vec3)>| {
-                h.map(|(st, nrm)| this.ccd_correction(&st, nrm, x0, xr, vr, th, correct))
+                h.map(|(st, nrm)| this.ccd_correction(&st, nrm, x0, xr, th, correct))
             };
             found.clear();
             found.par_extend(
@@ -78,7 +78,7 @@ impl SelfCollider {
                 pass.add(c, &self.w);
                 self.ccd_changed.answer_again(&c.st.idx[..c.st.len]);
             }
-            pass.apply(x1, v1);
+            self.report.slipping += pass.apply(x1, v1, &self.w_true);
             self.jacobi = pass;
         } else {
             for c in &found {
@@ -151,14 +151,14 @@ impl SelfCollider {
         normal: Vec3,
         x0: &[Vec3],
         x1: &[Vec3],
-        v1: &[Vec3],
         th: &[f64],
         correct: bool,
     ) -> Correction {
         let none = Correction {
             st: *st,
             dx: Vec3::ZERO,
-            dv: Vec3::ZERO,
+            n: Vec3::ZERO,
+            mu: 0.0,
             residual: 1.0,
             layers: None,
         };
@@ -178,14 +178,14 @@ impl SelfCollider {
         if d1 >= gap {
             return none;
         }
-        // The impact is inelastic: the pair's approaching normal velocity goes, nothing more.
-        // Adding the position change over h instead would turn a deep correction into speed
-        // (metres per second on robot_cape where the arms reverse).
-        let vn = n.dot(st.eval(v1));
+        // The impact is inelastic: the pair's approaching normal velocity goes, nothing more
+        // (`impulses`). Adding the position change over h instead would turn a deep correction
+        // into speed (metres per second on robot_cape where the arms reverse).
         Correction {
             st: *st,
             dx: n * (gap - d1),
-            dv: if vn < 0.0 { n * -vn } else { Vec3::ZERO },
+            n,
+            mu: 0.0,
             residual: 1.0,
             layers: None,
         }

@@ -5,7 +5,7 @@ use super::bvh::TopologyBvh;
 use super::changed::Changed;
 use super::jacobi::{Correction, JacobiPass, Keyed};
 use super::report::SelfContactReport;
-use super::rest::RestShape;
+use super::rest::{Csr, RestShape};
 use super::stencil::Stencil;
 use super::touch::SelfTouch;
 use crate::collide::broad::{Aabb, PairScratch, SpatialHash};
@@ -47,7 +47,12 @@ pub(crate) struct SelfCollider {
     pub(super) near_kept_valid: bool,
     /// The pairs of two layers this substep's repulsion answered (see [`super::SelfTouch`]).
     pub(super) touches: Vec<SelfTouch>,
+    /// Per vertex, the triangles around it (a touch's faces to hand over to, `touch`).
+    pub(super) vertex_faces: Csr,
     pub(super) w: Vec<f64>,
+    /// Inverse masses without the obstacle-contact weighting of `w`: friction's impulses are
+    /// distributed by these, equal and opposite on the two layers.
+    pub(super) w_true: Vec<f64>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
     pub(super) in_zone: Vec<bool>,
@@ -81,6 +86,16 @@ impl SelfCollider {
         &self.touches
     }
 
+    /// The triangles around vertex `v` (empty beyond the mesh).
+    pub fn faces_around(&self, v: u32) -> Vec<[u32; 3]> {
+        let row = if (v as usize) < self.vertex_faces.rows() {
+            self.vertex_faces.row(v as usize)
+        } else {
+            &[]
+        };
+        row.iter().map(|&t| self.triangles[t as usize]).collect()
+    }
+
     pub fn new(triangles: &[[u32; 3]], n_vertices: usize) -> Self {
         let edges: Vec<[u32; 2]> = crate::cloth::topology::unique_edges(triangles)
             .into_iter()
@@ -110,7 +125,9 @@ impl SelfCollider {
             near_kept: Vec::new(),
             near_kept_valid: false,
             touches: Vec::new(),
+            vertex_faces: vertex_faces(triangles, n_vertices),
             w: Vec::new(),
+            w_true: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),
             in_zone: Vec::new(),
@@ -147,4 +164,21 @@ impl SelfCollider {
             len: 4,
         }
     }
+}
+
+/// Per vertex, the indices of the triangles around it.
+fn vertex_faces(triangles: &[[u32; 3]], n_vertices: usize) -> Csr {
+    let mut rows = vec![Vec::new(); n_vertices];
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            if let Some(row) = rows.get_mut(v as usize) {
+                row.push(t as u32);
+            }
+        }
+    }
+    let mut csr = Csr::default();
+    for row in &mut rows {
+        csr.push(row);
+    }
+    csr
 }

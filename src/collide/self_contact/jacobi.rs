@@ -14,6 +14,7 @@
 //! vertex decide; equal moves still give their mean (no overshoot when k pairs push one way), and
 //! two opposite moves give their sum (a vertex squeezed between layers).
 
+use super::impulses::{Impact, Impulses};
 use super::stencil::Stencil;
 use crate::Vec3;
 
@@ -68,12 +69,14 @@ impl Averaged {
 pub(super) type Keyed = ((u32, u32), Correction);
 
 /// One pair's answer, computed on the pass's start state: its stencil, the change of its
-/// positions' and of its velocities' weighted sum.
+/// positions' weighted sum, and the normal and friction coefficient its velocities are
+/// answered with (`impulses`; a zero normal: none).
 #[derive(Clone, Copy)]
 pub(super) struct Correction {
     pub st: Stencil,
     pub dx: Vec3,
-    pub dv: Vec3,
+    pub n: Vec3,
+    pub mu: f64,
     /// How far short of its target the pair is, as a fraction of its contact distance.
     pub residual: f64,
     /// A vertex-triangle pair of two layers: the face normal towards the vertex and the
@@ -81,22 +84,32 @@ pub(super) struct Correction {
     pub layers: Option<(Vec3, f64)>,
 }
 
-/// Averaged position and velocity corrections of one pass.
+/// Averaged position corrections of one pass, and its pairs' velocity answers for
+/// `impulses` (which conserve momentum, where averaged moves do not).
 #[derive(Default)]
 pub(super) struct JacobiPass {
     dx: Averaged,
-    dv: Averaged,
+    impacts: Vec<Impact>,
+    impulses: Impulses,
 }
 
 impl JacobiPass {
     pub fn add(&mut self, c: &Correction, w: &[f64]) {
-        if self.dx.add(&c.st, w, c.dx) && c.dv != Vec3::ZERO {
-            self.dv.add(&c.st, w, c.dv);
+        if self.dx.add(&c.st, w, c.dx) && c.n != Vec3::ZERO {
+            self.impacts.push(Impact {
+                st: c.st,
+                n: c.n,
+                mu: c.mu,
+            });
         }
     }
 
-    pub fn apply(&mut self, x: &mut [Vec3], v: &mut [Vec3]) {
+    /// Moves positions by their averaged corrections and answers velocities by impulses
+    /// distributed by the true inverse masses `w_true`; returns the pairs whose friction slid.
+    pub fn apply(&mut self, x: &mut [Vec3], v: &mut [Vec3], w_true: &[f64]) -> usize {
         self.dx.apply(x);
-        self.dv.apply(v);
+        let sliding = self.impulses.apply(&self.impacts, w_true, v);
+        self.impacts.clear();
+        sliding
     }
 }

@@ -17,8 +17,8 @@
 //! Files: `stencil` (a pair as a weighted vertex sum), `collider` (topology and buffers),
 //! `pairs` (broad phase; `bvh` its hierarchy with normal cones), `exempt` (pairs that are no
 //! contact: rest proximity, seams being sewn; `rest` holds the rest-close lists), one query per
-//! file (`proximity`, `ccd`, `intersections`), `jacobi` (a pass's corrections averaged per
-//! vertex), `changed` (the pairs a pass can skip: none of their vertices changed), `zones`
+//! file (`proximity`, `ccd`, `intersections`), `jacobi` (a pass's position corrections averaged per
+//! vertex), `impulses` (its velocity answers, momentum-conserving impulses), `changed` (the pairs a pass can skip: none of their vertices changed), `zones`
 //! (the impact-zone fail-safe), `resolve` (their order per detection mode), `report` (its
 //! counts), `touch` (the layers resting on each other, which the solver holds next substep).
 
@@ -27,6 +27,7 @@ mod ccd;
 mod changed;
 mod collider;
 mod exempt;
+mod impulses;
 mod intersections;
 mod jacobi;
 mod pairs;

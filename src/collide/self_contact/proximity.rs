@@ -92,10 +92,10 @@ impl SelfCollider {
         let (tested, near_valid);
         {
             let this = &*self;
-            let (xr, vr): (&[Vec3], &[Vec3]) = (x1, v1);
+            let xr: &[Vec3] = x1;
             let flags = since.map(|_| this.rep_changed.flags());
             let anew = |idx: &[u32]| flags.is_none_or(|f| any_of(f, idx));
-            let answer = |c: Option<Close>| c.and_then(|c| this.repel(&c, xr, vr, friction));
+            let answer = |c: Option<Close>| c.and_then(|c| this.repel(&c, xr, friction));
             found_vt.clear();
             found_vt.par_extend(
                 pairs
@@ -151,7 +151,7 @@ impl SelfCollider {
             pass.add(c, &self.w);
             self.rep_changed.answer_again(&c.st.idx[..c.st.len]);
         }
-        pass.apply(x1, v1);
+        self.report.slipping += pass.apply(x1, v1, &self.w_true);
         let unsettled = found.iter().filter(|c| c.residual > SETTLED).count();
         self.report.repulsions += found.len();
         self.jacobi = pass;
@@ -416,15 +416,10 @@ impl SelfCollider {
     }
 
     /// The answer to a close pair: separation to its contact distance `gap` along `n` (the
-    /// side it started on), its approaching normal velocity removed and Coulomb friction on the
-    /// tangential part.
-    fn repel(
-        &self,
-        close: &Close,
-        x1: &[Vec3],
-        v1: &[Vec3],
-        friction: &[f64],
-    ) -> Option<Correction> {
+    /// side it started on), and for `impulses` that normal (its approaching normal velocity
+    /// removed) and the pair's Coulomb coefficient (friction on the tangential part): the mean
+    /// of its vertices' by the weight of each in the pair.
+    fn repel(&self, close: &Close, x1: &[Vec3], friction: &[f64]) -> Option<Correction> {
         let (st, n, gap) = (&close.st, close.n, close.gap);
         let dist = n.dot(st.eval(x1));
         if dist >= gap || st.inv_mass(&self.w) <= 0.0 {
@@ -434,28 +429,15 @@ impl SelfCollider {
             .rest
             .as_ref()
             .map_or(f64::INFINITY, |r| PUSH_CAP * r.max_edge);
-        let vr = st.eval(v1);
-        let vn = vr.dot(n);
-        let dv = if vn < 0.0 {
-            let vt = vr - n * vn;
-            let mu = (0..st.len)
-                .map(|k| friction[st.idx[k] as usize] * st.c[k].abs())
-                .sum::<f64>()
-                / (0..st.len).map(|k| st.c[k].abs()).sum::<f64>();
-            let vt_len = vt.length();
-            let dvt = if vt_len <= -mu * vn {
-                -vt
-            } else {
-                vt * (mu * vn / vt_len)
-            };
-            n * (-vn) + dvt
-        } else {
-            Vec3::ZERO
-        };
+        let mu = (0..st.len)
+            .map(|k| friction[st.idx[k] as usize] * st.c[k].abs())
+            .sum::<f64>()
+            / (0..st.len).map(|k| st.c[k].abs()).sum::<f64>();
         Some(Correction {
             st: *st,
             dx: n * (gap - dist).min(cap),
-            dv,
+            n,
+            mu,
             residual: (gap - dist) / gap,
             layers: close.layers.then_some((n, gap)),
         })

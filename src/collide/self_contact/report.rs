@@ -20,6 +20,9 @@ pub struct SelfContactReport {
     /// Impact zones formed by the fail-safe, and the vertices of the largest.
     pub zones: usize,
     pub largest_zone: usize,
+    /// Pairs whose Coulomb friction slid in the passes' impulses (at its limit, the pair still
+    /// slipping), summed over the passes.
+    pub slipping: usize,
     /// Cloth-cloth passes run again because the first moved vertices into an obstacle.
     pub obstacle_retests: usize,
 }
@@ -36,5 +39,6 @@ impl SelfContactReport {
         self.zones += o.zones;
         self.largest_zone = self.largest_zone.max(o.largest_zone);
         self.obstacle_retests += o.obstacle_retests;
+        self.slipping += o.slipping;
     }
 }

@@ -6,8 +6,10 @@ use super::report::SelfContactReport;
 use crate::collide::settings::{CollisionSettings, DetectionMode};
 use crate::Vec3;
 
-/// Vertices touching an obstacle respond to cloth-cloth impulses as if this much heavier, so the
-/// cloth on top gives way rather than the layer pressed against the obstacle.
+/// Vertices touching an obstacle respond to cloth-cloth position corrections as if this much
+/// heavier, so the cloth on top gives way rather than the layer pressed against the obstacle.
+/// Velocities are answered by impulses at the true masses (`impulses`), which conserve the
+/// layers' momentum.
 const CONTACT_MASS_FACTOR: f64 = 10.0;
 
 /// Repulsion passes on the first substep (continuous mode), each on the first one's candidates
@@ -49,6 +51,8 @@ impl SelfCollider {
             self.capture_rest(x0, thickness);
         }
         self.report.exempt = self.rest.as_ref().map_or(0, |r| r.pairs());
+        self.w_true.clear();
+        self.w_true.extend_from_slice(&inv_mass[..n]);
         self.w.clear();
         self.w.extend((0..n).map(|i| {
             if in_contact[i] {

@@ -40,7 +40,12 @@ impl SelfTouch {
     /// new, or `None` when the vertex is no longer over the face within reach (or the face is
     /// degenerate).
     pub fn refreshed(&self, x: &[Vec3]) -> Option<SelfTouch> {
-        let [a, b, c] = self.triangle.map(|i| x[i as usize]);
+        self.over(self.triangle, x)
+    }
+
+    /// The pair's vertex over `triangle` at `x`, as [`SelfTouch::refreshed`].
+    fn over(&self, triangle: [u32; 3], x: &[Vec3]) -> Option<SelfTouch> {
+        let [a, b, c] = triangle.map(|i| x[i as usize]);
         let p = x[self.vertex as usize];
         let nf = (b - a).cross(c - a).normalize_or_zero();
         if nf == Vec3::ZERO {
@@ -53,17 +58,55 @@ impl SelfTouch {
         let over = normal.dot(r);
         (d < KEEP_REACH * self.gap && over >= OVER_FACE_COS * d && over >= 0.0).then_some(
             SelfTouch {
+                triangle,
                 bary,
                 normal,
                 ..*self
             },
         )
     }
+
+    /// The pair at `x` as [`SelfTouch::refreshed`], or, when the vertex has left its face (a
+    /// layer sliding over another), the nearest face around the old one's vertices
+    /// (`faces_around`) that the vertex is over within reach and that does not hold the vertex.
+    /// Dropped there, the vertex would fall into the layer until the repulsion (which answers
+    /// pairs closer than the contact distance, where the spring holds them a little beyond)
+    /// found it again, held in the meantime by position moves without friction: a cloth slid
+    /// down a cloth incline at several times Coulomb's acceleration.
+    pub fn handed_over(
+        &self,
+        x: &[Vec3],
+        faces_around: impl Fn(u32) -> Vec<[u32; 3]>,
+    ) -> Option<SelfTouch> {
+        if let Some(t) = self.refreshed(x) {
+            return Some(t);
+        }
+        let p = x[self.vertex as usize];
+        self.triangle
+            .iter()
+            .flat_map(|&v| faces_around(v))
+            .filter(|tri| *tri != self.triangle && !tri.contains(&self.vertex))
+            .filter_map(|tri| self.over(tri, x))
+            .map(|t| {
+                let q: Vec3 = (0..3).map(|k| x[t.triangle[k] as usize] * t.bary[k]).sum();
+                ((p - q).length_squared(), t)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, t)| t)
+    }
 }
 
 /// The pairs of `found` (this pass's, first) and `kept` (the last pass's) that are still over
-/// their faces at `x`, refreshed, each once, into `out` sorted by (vertex, triangle).
-pub fn refresh(found: &[SelfTouch], kept: &[SelfTouch], x: &[Vec3], out: &mut Vec<SelfTouch>) {
+/// their faces at `x`, or handed over to a face around (`SelfTouch::handed_over`, with the
+/// triangles around each vertex `faces_around`), refreshed, each once, into `out` sorted by
+/// (vertex, triangle).
+pub fn refresh(
+    found: &[SelfTouch],
+    kept: &[SelfTouch],
+    x: &[Vec3],
+    faces_around: impl Fn(u32) -> Vec<[u32; 3]>,
+    out: &mut Vec<SelfTouch>,
+) {
     out.clear();
     let n = x.len();
     let in_range =
@@ -73,7 +116,7 @@ pub fn refresh(found: &[SelfTouch], kept: &[SelfTouch], x: &[Vec3], out: &mut Ve
             .iter()
             .chain(kept)
             .filter(|t| in_range(t))
-            .filter_map(|t| t.refreshed(x)),
+            .filter_map(|t| t.handed_over(x, &faces_around)),
     );
     // Stable: a pair found in this pass keeps this pass's side of the face.
     out.sort_by_key(|t| (t.vertex, t.triangle));
@@ -121,7 +164,7 @@ mod tests {
     fn refresh_keeps_each_pair_once() {
         let (t, x) = touch(0.005);
         let mut out = Vec::new();
-        refresh(&[t], &[t, t], &x, &mut out);
+        refresh(&[t], &[t, t], &x, |_| Vec::new(), &mut out);
         assert_eq!(out.len(), 1);
     }
 }

@@ -12,7 +12,8 @@ use crate::Vec3;
 
 impl Implicit {
     /// Refits the friction of acting edge springs' contact points that the iterate's velocity
-    /// calls another mode for (see `Drag::refit`); returns whether any changed (the system
+    /// calls another mode for (see `Drag::refit`, and `Drag::refit_unloaded` for two cloth
+    /// layers); returns whether any changed (the system
     /// then needs a new solve).
     pub(super) fn refit_edge_drags(&mut self, d: &Dynamics, v0: &[Vec3], h: f64) -> bool {
         let Some(a) = self.a.as_mut() else {
@@ -22,7 +23,13 @@ impl Implicit {
         for (k, g) in self.edge_drags.iter_mut() {
             let c = &d.constraints.contacts[*k];
             let u0 = c.point_velocity(v0);
-            let Some(mode) = g.refit(u0 + c.point_velocity(&self.dv)) else {
+            let u1 = u0 + c.point_velocity(&self.dv);
+            let refit = if c.is_pair() {
+                g.refit_unloaded(u1)
+            } else {
+                g.refit(u1)
+            };
+            let Some(mode) = refit else {
                 continue;
             };
             let (old_force, old_damping) = (g.force(u0), g.damping());

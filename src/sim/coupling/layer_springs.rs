@@ -54,8 +54,15 @@ impl Coupling {
     /// that load whatever holds the vertex up (the seat under a face, thousands of times its
     /// weight) and throws the face.
     ///
-    /// The springs carry no friction: the repulsion's Coulomb friction still acts on the pairs
-    /// it answers.
+    /// Each spring carries Coulomb friction on the pair's relative velocity, the vertex's
+    /// against the face point's under it (`v_p - sum b_i v_i` in the face's tangent plane),
+    /// when the integrator solves friction: its limit is `mu` times the force the vertex's layer
+    /// springs ended the last substep with (shared among its springs of this substep, so the
+    /// load stays with a vertex sliding from face to face), spread by the spring's weights, so the friction
+    /// forces on the two layers are equal and opposite like the normal ones. Why in the solve:
+    /// a resting pair is held at [`LAYER_REST`] contact distances, out of the repulsion's reach,
+    /// so the repulsion's friction never acts on cloth resting on cloth, and a napkin on a towel
+    /// slid on as if on ice. A new pair (no force yet) has the repulsion's friction that substep.
     pub(super) fn layer_springs(
         &mut self,
         stage: Option<&CollisionStage>,
@@ -66,9 +73,22 @@ impl Coupling {
             return;
         };
         let (x, mass, filter) = (&s.cloth.x, &s.cloth.mass, &self.constraints.filter);
+        let mu = &s.cloth.friction;
+        let lagged = &self.layer_forces;
         let n = x.len();
         let k = LAYER_STIFFNESS / (s.h_scene * s.h_scene);
-        for t in stage.self_touches() {
+        let touches = stage.self_touches();
+        // A vertex's springs this substep, which share its lagged normal force (touches are
+        // sorted by vertex).
+        let springs_of = |v: u32| {
+            let from = touches.partition_point(|t| t.vertex < v);
+            touches[from..]
+                .iter()
+                .take_while(|t| t.vertex == v)
+                .count()
+                .max(1)
+        };
+        for t in touches {
             let [a, b, c] = t.triangle;
             let [wa, wb, wc] = t.bary;
             let mut spring = ContactSpring {
@@ -87,9 +107,28 @@ impl Coupling {
             }
             spring.gap = (spring.along(x) + RESTORE * t.gap).min(LAYER_REST * t.gap);
             spring.stiffness = k * spring.point_mass(mass);
+            if caps.solves_friction {
+                let normal_force = lagged
+                    .binary_search_by(|l| l.0.cmp(&t.vertex))
+                    .map_or(0.0, |k| lagged[k].1 / springs_of(t.vertex) as f64);
+                spring.friction = pair_friction(&spring, mu) * normal_force;
+            }
             if spring.is_valid(n) && spring.gap > 0.0 {
                 self.constraints.contacts.push(spring);
             }
         }
+    }
+}
+
+/// The Coulomb coefficient of a vertex-face pair: the mean of the vertex's and the face point's
+/// (its vertices' by barycentric weight), as the repulsion takes it (`self_contact::proximity`).
+fn pair_friction(spring: &ContactSpring, mu: &[f64]) -> f64 {
+    let (sum, weight) = spring.slots().fold((0.0, 0.0), |(s, w), (i, c)| {
+        (s + mu.get(i).copied().unwrap_or(0.0) * c.abs(), w + c.abs())
+    });
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        0.0
     }
 }

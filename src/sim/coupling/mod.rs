@@ -41,7 +41,7 @@ use super::front::Front;
 use crate::cloth::Cloth;
 use crate::collide::{Arrival, CollisionStage, HeldNormals, SolverFeedback};
 use crate::effects::EffectSet;
-use crate::integrate::{Capabilities, Constraints};
+use crate::integrate::{Capabilities, Constraints, STICK_SPEED};
 use crate::linalg::Filter;
 use crate::{Pose, Vec3};
 use pinch_springs::Pinch;
@@ -62,6 +62,13 @@ pub(super) struct Coupling {
     /// Indices into `constraints.contacts` from which the springs hold cloth layers apart
     /// (`layer_springs`); the obstacles' come before.
     layers_from: usize,
+    /// Per vertex, the end forces (N) of the last substep's layer springs on it as their
+    /// vertex (summed over its faces), sorted: the normal force of its friction next substep,
+    /// kept by the vertex as it slides from face to face.
+    layer_forces: Vec<(u32, f64)>,
+    /// Vertices whose cloth-cloth friction in the last solve ended slipping (see
+    /// [`Coupling::solved`]).
+    pub layer_slipping: usize,
     /// What the solver did this substep, for the stage's `resolve`.
     pub feedback: SolverFeedback,
     /// Indices into `constraints.contacts` of the springs on moving features: they do work on
@@ -138,12 +145,53 @@ impl Coupling {
     }
 
     /// The solve is done: its edge springs' end forces (`None` when it does not solve them)
-    /// are the normal forces of their friction next substep.
-    pub fn solved(&mut self, contact_forces: Option<&[f64]>) {
+    /// are the normal forces of their friction next substep. `v`, the end velocities, gives
+    /// the vertices whose layer friction ended slipping: a vertex over another layer's face,
+    /// its spring pressed and its friction acting, moving over the face faster than
+    /// [`STICK_SPEED`] (counted once per vertex).
+    pub fn solved(&mut self, contact_forces: Option<&[f64]>, v: &[Vec3]) {
+        self.layer_slipping = 0;
+        if let Some(forces) = contact_forces {
+            let mut last = None;
+            for (c, f) in self
+                .constraints
+                .contacts
+                .iter()
+                .zip(forces)
+                .skip(self.layers_from)
+            {
+                let u = c.point_velocity(v);
+                let slip = u - c.normal * c.normal.dot(u);
+                if *f > 0.0
+                    && c.friction > 0.0
+                    && slip.length() > STICK_SPEED
+                    && last != Some(c.verts[0])
+                {
+                    self.layer_slipping += 1;
+                    last = Some(c.verts[0]);
+                }
+            }
+        }
         self.spring_forces.clear();
         self.arrival_forces.clear();
         self.pinch_grip = self.grip(contact_forces);
+        self.layer_forces.clear();
         if let Some(forces) = contact_forces {
+            let layers = self.constraints.contacts.iter().zip(forces);
+            self.layer_forces.extend(
+                layers
+                    .skip(self.layers_from)
+                    .map(|(c, f)| (c.verts[0], *f))
+                    .filter(|(_, f)| *f > 0.0),
+            );
+            self.layer_forces.sort_by_key(|a| a.0);
+            self.layer_forces.dedup_by(|b, a| {
+                let same = a.0 == b.0;
+                if same {
+                    a.1 += b.1;
+                }
+                same
+            });
             // Each arrival's normal spring (its anchor's tangential springs follow it).
             self.arrival_forces.extend(
                 (self.arrival_springs.iter()).map(|&k| forces.get(k).copied().unwrap_or(0.0)),
