@@ -1,7 +1,7 @@
 //! The integrator a scene file names, and the method it builds.
 
 use super::explicit::{ExplicitEuler, SymplecticEuler};
-use super::implicit::{Implicit, ImplicitSettings};
+use super::implicit::{Implicit, ImplicitSettings, LinearSolver};
 use super::integrator::Integrator;
 use super::rk4::Rk4;
 use serde::{Deserialize, Serialize};
@@ -25,11 +25,17 @@ impl IntegratorKind {
     ];
 
     pub fn build(self, implicit: ImplicitSettings) -> Box<dyn Integrator> {
+        self.build_with(implicit, LinearSolver::Auto)
+    }
+
+    /// [`Self::build`] with the implicit step's linear path (`solver.linear`; the explicit
+    /// methods solve no linear system and ignore it).
+    pub fn build_with(self, implicit: ImplicitSettings, linear: LinearSolver) -> Box<dyn Integrator> {
         match self {
             IntegratorKind::ExplicitEuler => Box::new(ExplicitEuler::default()),
             IntegratorKind::SymplecticEuler => Box::new(SymplecticEuler::default()),
             IntegratorKind::Rk4 => Box::new(Rk4::default()),
-            IntegratorKind::Implicit => Box::new(Implicit::new(implicit)),
+            IntegratorKind::Implicit => Box::new(Implicit::with_linear(implicit, linear)),
         }
     }
 
