@@ -159,7 +159,11 @@ fn measure_paths() {
         .and_then(|r| r.parse().ok())
         .unwrap_or(60);
     for file in ["bench_s1.yaml", "bench_s2.yaml"] {
+        let only = std::env::var("DRAPE_LINEAR").ok();
         for linear in [LinearSolver::Pcg, LinearSolver::Direct] {
+            if only.as_deref().is_some_and(|o| o != linear.name()) {
+                continue;
+            }
             let path = Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("benches/scenes")
                 .join(file);

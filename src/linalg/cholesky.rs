@@ -6,6 +6,7 @@
 //! is done once per pattern of `A` ([`BlockCsr::pattern_id`]) and every factorisation after it
 //! is numeric only, one per matrix or filter change.
 
+use super::dissection::nested_dissection;
 use super::{BlockCsr, Filter};
 use crate::{Mat3, Vec3};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -15,6 +16,7 @@ use faer::sparse::linalg::cholesky::{
     SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::perm::PermRef;
 use faer::{Conj, MatMut, Par, Side};
 
 /// Why the factorisation could not be used (the caller solves iteratively instead).
@@ -92,25 +94,7 @@ impl FilteredCholesky {
     /// Floating-point multiply-adds of one numeric factorisation, `sum_j c_j^2` over the
     /// columns' counts of `L` (0 before the first analysis).
     pub fn factor_flops(&self) -> f64 {
-        let Some(s) = self.symbolic.as_ref() else {
-            return 0.0;
-        };
-        match s.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(l) => {
-                l.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
-            }
-            SymbolicCholeskyRaw::Supernodal(l) => {
-                let (begin, end) = (l.supernode_begin(), l.supernode_end());
-                let rows = l.col_ptr_for_row_idx();
-                (0..l.n_supernodes())
-                    .map(|k| {
-                        let width = end[k] - begin[k];
-                        let below = (rows[k + 1] - rows[k]) as f64;
-                        (0..width).map(|c| ((width - c) as f64 + below).powi(2)).sum::<f64>()
-                    })
-                    .sum()
-            }
-        }
+        self.symbolic.as_ref().map_or(0.0, |s| flops(&s.symbolic))
     }
 
     /// Factorises `S A S + (I - S)` (the symbolic analysis only when `a`'s pattern is new).
@@ -180,6 +164,41 @@ impl FilteredCholesky {
     }
 }
 
+/// Multiply-adds of one numeric factorisation with `symbolic`, `sum_j c_j^2` over the column
+/// counts of `L`.
+fn flops(symbolic: &SymbolicCholesky<usize>) -> f64 {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(l) => {
+            l.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
+        }
+        SymbolicCholeskyRaw::Supernodal(l) => {
+            let (begin, end) = (l.supernode_begin(), l.supernode_end());
+            let rows = l.col_ptr_for_row_idx();
+            (0..l.n_supernodes())
+                .map(|k| {
+                    let width = end[k] - begin[k];
+                    let below = (rows[k + 1] - rows[k]) as f64;
+                    (0..width).map(|c| ((width - c) as f64 + below).powi(2)).sum::<f64>()
+                })
+                .sum()
+        }
+    }
+}
+
+/// The scalar permutation `(forward, inverse)` of a vertex order: vertex `order[k]`'s three
+/// rows become rows `3k..3k + 3`.
+fn scalar_permutation(order: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let fwd: Vec<usize> = order
+        .iter()
+        .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
+        .collect();
+    let mut inv = vec![0; fwd.len()];
+    for (k, &i) in fwd.iter().enumerate() {
+        inv[i] = k;
+    }
+    (fwd, inv)
+}
+
 /// The scalar CSC pattern of `K`'s lower triangle for `a`'s block pattern, read as the upper
 /// triangle of the rows: column `3i + c` holds rows `3j + r` of blocks `(i, j)`, `j >= i`
 /// (`r >= c` on the diagonal block). Every block is stored whole, so filters never change it.
@@ -203,17 +222,30 @@ fn lower_pattern(a: &BlockCsr) -> (Vec<usize>, Vec<usize>) {
     (col_ptr, row_idx)
 }
 
+/// The symbolic factor of `a`'s pattern in the cheaper of two orderings: nested dissection of
+/// the vertex graph ([`super::dissection`]) and faer's approximate minimum degree.
 fn analyse(a: &BlockCsr) -> Result<Symbolic, CholeskyError> {
     let (col_ptr, row_idx) = lower_pattern(a);
     let n = 3 * a.rows();
     let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-    let symbolic = factorize_symbolic_cholesky(
-        pattern,
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map_err(|e| CholeskyError::Symbolic(format!("{e:?}")))?;
+    let (fwd, inv) = scalar_permutation(&nested_dissection(a));
+    let perm = PermRef::new_checked(&fwd, &inv, n);
+    let symbolic = |ordering| {
+        factorize_symbolic_cholesky(
+            pattern,
+            Side::Lower,
+            ordering,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| CholeskyError::Symbolic(format!("{e:?}")))
+    };
+    let dissected = symbolic(SymmetricOrdering::Custom(perm))?;
+    let amd = symbolic(SymmetricOrdering::Amd)?;
+    let symbolic = if flops(&amd) < flops(&dissected) {
+        amd
+    } else {
+        dissected
+    };
     let req = StackReq::any_of(&[
         symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
         symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),

@@ -5,6 +5,7 @@
 
 mod cholesky;
 mod dense;
+mod dissection;
 mod filter;
 mod flat;
 mod scratch;

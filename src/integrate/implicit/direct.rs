@@ -1,12 +1,17 @@
-//! The direct linear path: the step's solves preconditioned by the sparse Cholesky factor of the
-//! filtered system `S A S + (I - S)`, refactorised only when `A`'s values or the filter changed
-//! since the factor was computed, on the symbolic analysis kept for `A`'s pattern.
+//! The direct linear path: the step's solves preconditioned by the sparse Cholesky factor of
+//! the filtered system `S A S + (I - S)`, refactorised (numerically) whenever `A`'s values or
+//! the filter changed since, on the symbolic analysis kept for `A`'s pattern.
 //!
-//! The factor is exact for `A`, so the modified PCG ends after one iteration. Pair springs
-//! between cloth layers couple vertices outside `A`'s pattern (`contact::OffPattern`); `A`
-//! holds their lumped, stiffer diagonal, so the factor is an approximate inverse of the
-//! system with them and the iteration takes a few more steps instead of a new pattern, a new
-//! symbolic analysis, every time self-contact changes.
+//! The factor of the current matrix is exact: the modified PCG ends after one iteration. Pair
+//! springs between cloth layers couple vertices outside `A`'s pattern (`contact::OffPattern`);
+//! `A` holds their lumped, stiffer diagonal, so the factor is an approximate inverse of the
+//! system with them and the iteration takes a few more steps instead of a new pattern (and a
+//! new symbolic analysis) every time self-contact changes.
+//!
+//! An earlier matrix's factor (the last step's, or the same step's before an active-set
+//! round's refits or at the last Newton iterate) measured a poor preconditioner on S1 64x64
+//! (`cargo bench --bench contact`): 25-30 iterations a solve, each two triangular solves at
+//! about a tenth of a factorisation, so every changed matrix is refactorised.
 
 use super::solve::SolveKind;
 use super::solver::Implicit;
@@ -47,9 +52,9 @@ impl Implicit {
         if let Some(done) = (self.pcg).start(a, filt, &self.b, &self.z, tol, &mut self.dv, second) {
             return Some(done);
         }
+        let direct = &mut self.direct;
         let clock = Instant::now();
         let (mut factorisations, mut analyses) = (0, 0);
-        let direct = &mut self.direct;
         if !direct.is_current(a, filt) {
             let before = direct.chol.analyses;
             let done = direct.chol.factorise(a, filt);
