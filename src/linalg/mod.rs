@@ -1,11 +1,10 @@
 //! Linear algebra shared by the force terms (`effects`), the time integrators (`integrate`) and
 //! the collision stage (`collide`): the block-sparse system matrix and its pattern, the
-//! velocity filter, the filtered system's sparse Cholesky factor, small dense helpers, flat views and scratch buffers. It imports nothing of
-//! the simulator above it.
+//! velocity filter, the filtered system's sparse Cholesky factor, small dense helpers, flat
+//! views and scratch buffers. It imports nothing of the simulator above it.
 
 mod cholesky;
 mod dense;
-mod dissection;
 mod filter;
 mod flat;
 mod scratch;
