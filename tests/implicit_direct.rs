@@ -115,6 +115,29 @@ fn direct_and_pcg_steps_agree_to_the_solve_tolerance() {
     }
 }
 
+/// `auto` decides from counts: the hanging cloth at 64x64, whose PCG solves take about 20
+/// iterations, stays on PCG; the 24x24 cloth draped on a sphere, whose solves take far more
+/// than the few a factorisation costs at that size, moves to the direct path and stays.
+#[test]
+fn auto_takes_the_direct_path_where_it_is_predicted_cheaper() {
+    let mut s = bundled_scene("hanging.yaml", 64);
+    s.solver.integrator = IntegratorKind::Implicit;
+    s.solver.linear = LinearSolver::Auto;
+    let mut hanging = s.build().expect("valid scene");
+    for step in 0..10 {
+        let m = hanging.step().expect("stable");
+        assert_eq!(m.linear_path, Some(LinearPath::Pcg), "hanging step {step}");
+    }
+    let mut sphere = scene(&CASES[2], LinearSolver::Auto, 1e-5);
+    let paths: Vec<_> = (0..CASES[2].steps)
+        .map(|_| sphere.step().expect("stable").linear_path)
+        .collect();
+    let first = paths.iter().position(|p| *p == Some(LinearPath::Direct));
+    let first = first.expect("the draped cloth moves to the direct path");
+    assert!(first >= 3, "decided from three steps' counts: {paths:?}");
+    assert!(paths[first..].iter().all(|p| *p == Some(LinearPath::Direct)), "{paths:?}");
+}
+
 /// A scene file's `solver.linear` names the path, and a wrong value is an error naming the key.
 #[test]
 fn scene_key_names_the_path() {

@@ -36,7 +36,12 @@ impl Implicit {
                 return stats;
             }
         }
-        self.solve_pcg(filt, kind, tol)
+        let stats = self.solve_pcg(filt, kind, tol);
+        if stats.iterations > 0 {
+            self.auto.iterations += stats.iterations;
+            self.auto.solves += 1;
+        }
+        stats
     }
 
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start). A start that meets

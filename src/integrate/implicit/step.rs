@@ -75,7 +75,7 @@ impl Implicit {
         let clock = Instant::now();
         self.assemble(d, &State { t, x, v }, h);
         report.assembly_time_s = clock.elapsed().as_secs_f64();
-        self.choose_path(filt);
+        self.choose_path();
         report.linear_path = Some(self.path);
         // Constrained components of dv are fixed: z = (I - S)(v_target - v).
         for i in 0..n {
