@@ -70,7 +70,11 @@ struct Run {
 }
 
 fn load(file: &str, res: usize, linear: LinearSolver) -> (Simulation, Option<RobotDriver>) {
-    let dir = if file == TOWEL { "config" } else { "benches/scenes" };
+    let dir = if file == TOWEL {
+        "config"
+    } else {
+        "benches/scenes"
+    };
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir).join(file);
     let mut s = Scene::load(&path).expect("bundled bench scene");
     s.cloths[0].grid.resolution = [res, res];

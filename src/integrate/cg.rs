@@ -272,16 +272,16 @@ impl Pcg {
                     d
                 })
             } else {
-                    sum_in_halves(n, (out, r, filt, pinv), |(out, r, filt, pinv)| {
-                        let mut d = 0.0;
-                        for (((o, r), f), p) in out.iter_mut().zip(r).zip(filt).zip(pinv) {
-                            *o = f.apply(*p * *r);
-                            d += r.dot(*o);
-                        }
-                        d
-                    })
-                }
-            };
+                sum_in_halves(n, (out, r, filt, pinv), |(out, r, filt, pinv)| {
+                    let mut d = 0.0;
+                    for (((o, r), f), p) in out.iter_mut().zip(r).zip(filt).zip(pinv) {
+                        *o = f.apply(*p * *r);
+                        d += r.dot(*o);
+                    }
+                    d
+                })
+            }
+        };
         // The clock includes the first `M^-1 r`: with the Cholesky factor that is most of a
         // solve.
         let clock = std::time::Instant::now();

@@ -29,8 +29,18 @@ impl IntegratorKind {
     }
 
     /// [`Self::build`] with the implicit step's linear path (`solver.linear`; the explicit
-    /// methods solve no linear system and ignore it).
-    pub fn build_with(self, implicit: ImplicitSettings, linear: LinearSolver) -> Box<dyn Integrator> {
+    /// methods solve no linear system and ignore it). `auto` yields to the environment's
+    /// `DRAPE_LINEAR` (`pcg` or `direct`), which runs a test suite on one path throughout.
+    pub fn build_with(
+        self,
+        implicit: ImplicitSettings,
+        linear: LinearSolver,
+    ) -> Box<dyn Integrator> {
+        let linear = match (linear, std::env::var("DRAPE_LINEAR").as_deref()) {
+            (LinearSolver::Auto, Ok("pcg")) => LinearSolver::Pcg,
+            (LinearSolver::Auto, Ok("direct")) => LinearSolver::Direct,
+            _ => linear,
+        };
         match self {
             IntegratorKind::ExplicitEuler => Box::new(ExplicitEuler::default()),
             IntegratorKind::SymplecticEuler => Box::new(SymplecticEuler::default()),

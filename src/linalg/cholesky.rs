@@ -166,9 +166,11 @@ impl FilteredCholesky {
 /// counts of `L`.
 fn flops(symbolic: &SymbolicCholesky<usize>) -> f64 {
     match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(l) => {
-            l.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
-        }
+        SymbolicCholeskyRaw::Simplicial(l) => l
+            .col_ptr()
+            .windows(2)
+            .map(|w| ((w[1] - w[0]) as f64).powi(2))
+            .sum(),
         SymbolicCholeskyRaw::Supernodal(l) => {
             let (begin, end) = (l.supernode_begin(), l.supernode_end());
             let rows = l.col_ptr_for_row_idx();
@@ -176,7 +178,9 @@ fn flops(symbolic: &SymbolicCholesky<usize>) -> f64 {
                 .map(|k| {
                     let width = end[k] - begin[k];
                     let below = (rows[k + 1] - rows[k]) as f64;
-                    (0..width).map(|c| ((width - c) as f64 + below).powi(2)).sum::<f64>()
+                    (0..width)
+                        .map(|c| ((width - c) as f64 + below).powi(2))
+                        .sum::<f64>()
                 })
                 .sum()
         }
@@ -315,7 +319,11 @@ mod tests {
             a.mul(&sx, &mut asx);
             for i in 0..n {
                 let kx = filt[i].apply(asx[i]) + filt[i].constrained(x[i]);
-                assert!((kx - r[i]).length() < 1e-12, "round {round}, row {i}: {kx} vs {}", r[i]);
+                assert!(
+                    (kx - r[i]).length() < 1e-12,
+                    "round {round}, row {i}: {kx} vs {}",
+                    r[i]
+                );
             }
             assert_eq!((chol.analyses, chol.factorisations), (1, round + 1));
         }

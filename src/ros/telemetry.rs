@@ -12,8 +12,8 @@
 //! coordinates `uv` are in metres), over every triangle edge; the frame reports the largest.
 
 use crate::cloth::Cloth;
-use crate::ros::msg::{DiagnosticArray, DiagnosticStatus, Header, KeyValue, Time};
 use crate::integrate::LinearPath;
+use crate::ros::msg::{DiagnosticArray, DiagnosticStatus, Header, KeyValue, Time};
 use crate::sim::StepMetrics;
 use serde::{Deserialize, Serialize};
 

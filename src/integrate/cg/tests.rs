@@ -99,7 +99,11 @@ fn cholesky_preconditioner_agrees_with_multigrid() {
     // Pair springs between vertices the pattern does not couple (a layer under another).
     let mut pcg = Pcg::default();
     for k in 0..6u32 {
-        let (p, q, r) = (k * 13 % n as u32, (k * 29 + 70) % n as u32, (k * 29 + 71) % n as u32);
+        let (p, q, r) = (
+            k * 13 % n as u32,
+            (k * 29 + 70) % n as u32,
+            (k * 29 + 71) % n as u32,
+        );
         let c = ContactSpring {
             verts: [p, q, r, r],
             weights: [1.0, -0.5, -0.5, 0.0],
@@ -113,7 +117,10 @@ fn cholesky_preconditioner_agrees_with_multigrid() {
         pcg.extra.push(&c, &a, 1e-3);
     }
     let (dv, s) = direct(&a, &mut pcg);
-    assert!(s.residual <= tol && (2..30).contains(&s.iterations), "{s:?}");
+    assert!(
+        s.residual <= tol && (2..30).contains(&s.iterations),
+        "{s:?}"
+    );
     let mut reference = vec![Vec3::ZERO; n];
     let r = pcg.solve(&a, &filt, &b, &z, None, 1e-13, 10_000, &mut reference, None);
     assert!(r.residual <= 1e-13);

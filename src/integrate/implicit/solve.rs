@@ -84,7 +84,9 @@ impl Implicit {
             Some(h) if use_mg => Some(&mut h.mg),
             _ => None,
         };
-        let mut stats = self.pcg.iterate(a, filt, mgref.into(), tol, max_it, &mut self.dv);
+        let mut stats = self
+            .pcg
+            .iterate(a, filt, mgref.into(), tol, max_it, &mut self.dv);
         if use_mg && (stats.residual.is_nan() || stats.residual > tol) && stats.iterations < max_it
         {
             // The multigrid-preconditioned iteration broke down early (degenerate input): retry
