@@ -109,14 +109,14 @@ impl FilteredCholesky {
             &self.values,
         );
         self.factor.resize(sym.symbolic.len_val(), 0.0);
-        let mut stack = MemStack::new(&mut sym.mem);
+        let stack = MemStack::new(&mut sym.mem);
         let done = sym.symbolic.factorize_numeric_llt(
             &mut self.factor,
             k,
             Side::Lower,
             LltRegularization::default(),
             Par::Seq,
-            &mut stack,
+            stack,
             Default::default(),
         );
         self.factorisations += 1;
@@ -139,12 +139,12 @@ impl FilteredCholesky {
         self.rhs.clear();
         self.rhs.extend(r.iter().flat_map(|v| v.to_array()));
         let llt = LltRef::new(&sym.symbolic, &self.factor);
-        let mut stack = MemStack::new(&mut sym.mem);
+        let stack = MemStack::new(&mut sym.mem);
         llt.solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
             Par::Seq,
-            &mut stack,
+            stack,
         );
         for (o, c) in out.iter_mut().zip(self.rhs.chunks_exact(3)) {
             *o = Vec3::new(c[0], c[1], c[2]);
