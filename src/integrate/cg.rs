@@ -5,7 +5,7 @@
 
 use super::contact::OffPattern;
 use super::precond::Multigrid;
-use crate::linalg::{scratch, BlockCsr, Filter};
+use crate::linalg::{scratch, BlockCsr, Filter, FilteredCholesky};
 use crate::par::sum_in_halves;
 use crate::{Mat3, Vec3};
 
@@ -21,19 +21,47 @@ pub(crate) struct SolveStats {
     /// [`iteration_cost`]).
     pub flops: f64,
     pub bytes: f64,
+    /// Wall time preparing the preconditioner (multigrid update or Cholesky factorisation),
+    /// and the factorisations and symbolic analyses done for the solve.
+    pub setup_seconds: f64,
+    pub factorisations: u32,
+    pub analyses: u32,
+}
+
+/// The `M^-1` of one PCG solve.
+pub(crate) enum Precond<'a> {
+    /// The inverse of each vertex's diagonal block.
+    BlockJacobi,
+    /// A V-cycle of the smoothed-aggregation hierarchy.
+    Multigrid(&'a mut Multigrid),
+    /// The sparse Cholesky factor of the filtered matrix: exact for `A` itself (one iteration),
+    /// an approximate inverse when the system adds couplings outside `A`'s pattern
+    /// ([`OffPattern`]) or the factor is of a nearby matrix.
+    Cholesky(&'a mut FilteredCholesky),
+}
+
+impl<'a> From<Option<&'a mut Multigrid>> for Precond<'a> {
+    fn from(mg: Option<&'a mut Multigrid>) -> Self {
+        mg.map_or(Precond::BlockJacobi, Precond::Multigrid)
+    }
 }
 
 /// Floating-point operations and the least bytes one PCG iteration below streams: the product
 /// `A c` ([`BlockCsr::mul_bytes`]), the preconditioner (the V-cycle's
-/// [`Multigrid::apply_cost`], or block Jacobi's 3x3 inverse per vertex), and the vector passes
-/// of the loop (filter and dot of `q`; `dv`, `r` and `|r|^2`; the filter of `M^-1 r` and
-/// `r . s`; `c = s + beta c`: 15 reads or writes of `Vec3` and two of the filter per vertex).
-pub(crate) fn iteration_cost(a: &BlockCsr, mg: Option<&Multigrid>) -> (f64, f64) {
+/// [`Multigrid::apply_cost`], two triangular solves with the Cholesky factor, or block Jacobi's
+/// 3x3 inverse per vertex), and the vector passes of the loop (filter and dot of `q`; `dv`, `r`
+/// and `|r|^2`; the filter of `M^-1 r` and `r . s`; `c = s + beta c`: 15 reads or writes of
+/// `Vec3` and two of the filter per vertex).
+pub(crate) fn iteration_cost(a: &BlockCsr, pre: &Precond) -> (f64, f64) {
     let n = a.rows() as f64;
     let filter = std::mem::size_of::<Filter>() as f64;
-    let (pf, pb) = match mg {
-        Some(mg) => mg.apply_cost(),
-        None => (15.0 * n, n * (72.0 + 2.0 * 24.0)),
+    let (pf, pb) = match pre {
+        Precond::Multigrid(mg) => mg.apply_cost(),
+        Precond::Cholesky(c) => {
+            let l = c.factor_len() as f64;
+            (4.0 * l, 2.0 * l * 16.0)
+        }
+        Precond::BlockJacobi => (15.0 * n, n * (72.0 + 2.0 * 24.0)),
     };
     (
         a.mul_flops() + pf + 60.0 * n,
@@ -78,7 +106,7 @@ impl Pcg {
     ) -> SolveStats {
         match self.start(a, filt, b, z, tol, dv, second) {
             Some(done) => done,
-            None => self.iterate(a, filt, mg, tol, max_iterations, dv),
+            None => self.iterate(a, filt, mg.into(), tol, max_iterations, dv),
         }
     }
 
@@ -184,6 +212,9 @@ impl Pcg {
             seconds: 0.0,
             flops: 0.0,
             bytes: 0.0,
+            setup_seconds: 0.0,
+            factorisations: 0,
+            analyses: 0,
         })
     }
 
@@ -192,7 +223,7 @@ impl Pcg {
         &mut self,
         a: &BlockCsr,
         filt: &[Filter],
-        mut mg: Option<&mut Multigrid>,
+        mut pre: Precond,
         tol: f64,
         max_iterations: u32,
         dv: &mut [Vec3],
@@ -200,7 +231,7 @@ impl Pcg {
         let n = dv.len();
         let (mut rnorm2, bnorm2) = (self.rnorm2, self.bnorm2);
         let tol2 = tol * tol;
-        if mg.is_none() {
+        if matches!(pre, Precond::BlockJacobi) {
             // Block Jacobi's inverses (only then: computing them for every solve at 64x64
             // would cost the multigrid solves a noticeable share of their time).
             self.pinv.clear();
@@ -215,33 +246,48 @@ impl Pcg {
             }));
         }
         // `out = S M^-1 r`, returning `r . out`.
-        let precondition =
-            |pinv: &[Mat3], mg: &mut Option<&mut Multigrid>, r: &[Vec3], out: &mut [Vec3]| {
-                if let Some(mg) = mg {
+        let precondition = |pinv: &[Mat3], pre: &mut Precond, r: &[Vec3], out: &mut [Vec3]| {
+            let applied = match pre {
+                Precond::Multigrid(mg) => {
                     mg.apply(r, out);
-                    sum_in_halves(n, (out, r, filt), |(out, r, filt)| {
-                        let mut d = 0.0;
-                        for ((o, r), f) in out.iter_mut().zip(r).zip(filt) {
-                            *o = f.apply(*o);
-                            d += r.dot(*o);
-                        }
-                        d
-                    })
-                } else {
-                    sum_in_halves(n, (out, r, filt, pinv), |(out, r, filt, pinv)| {
-                        let mut d = 0.0;
-                        for (((o, r), f), p) in out.iter_mut().zip(r).zip(filt).zip(pinv) {
-                            *o = f.apply(*p * *r);
-                            d += r.dot(*o);
-                        }
-                        d
-                    })
+                    true
                 }
+                // The caller factorised before choosing this preconditioner; without a factor
+                // the iteration runs unpreconditioned rather than stopping.
+                Precond::Cholesky(c) => {
+                    if c.solve(r, out).is_err() {
+                        out.copy_from_slice(r);
+                    }
+                    true
+                }
+                Precond::BlockJacobi => false,
             };
-        let mut delta = precondition(&self.pinv, &mut mg, &self.r, &mut self.c);
-        let mut iterations = 0;
-        let (flops, bytes) = iteration_cost(a, mg.as_deref());
+            if applied {
+                sum_in_halves(n, (out, r, filt), |(out, r, filt)| {
+                    let mut d = 0.0;
+                    for ((o, r), f) in out.iter_mut().zip(r).zip(filt) {
+                        *o = f.apply(*o);
+                        d += r.dot(*o);
+                    }
+                    d
+                })
+            } else {
+                sum_in_halves(n, (out, r, filt, pinv), |(out, r, filt, pinv)| {
+                    let mut d = 0.0;
+                    for (((o, r), f), p) in out.iter_mut().zip(r).zip(filt).zip(pinv) {
+                        *o = f.apply(*p * *r);
+                        d += r.dot(*o);
+                    }
+                    d
+                })
+            }
+        };
+        // The clock includes the first `M^-1 r`: with the Cholesky factor that is most of a
+        // solve.
         let clock = std::time::Instant::now();
+        let mut delta = precondition(&self.pinv, &mut pre, &self.r, &mut self.c);
+        let mut iterations = 0;
+        let (flops, bytes) = iteration_cost(a, &pre);
         // The vector passes run in halves on two threads for large cloths (`sum_in_halves`).
         while rnorm2 > tol2 * bnorm2 && iterations < max_iterations {
             self.extra.system_product(a, &self.c, &mut self.q);
@@ -274,7 +320,7 @@ impl Pcg {
                 break;
             }
             let delta_old = delta;
-            delta = precondition(&self.pinv, &mut mg, &self.r, &mut self.s);
+            delta = precondition(&self.pinv, &mut pre, &self.r, &mut self.s);
             let beta = delta / delta_old;
             sum_in_halves(n, (&mut self.c[..], &self.s[..]), |(c, s)| {
                 for (c, s) in c.iter_mut().zip(s) {
@@ -289,6 +335,9 @@ impl Pcg {
             seconds: clock.elapsed().as_secs_f64(),
             flops,
             bytes,
+            setup_seconds: 0.0,
+            factorisations: 0,
+            analyses: 0,
         }
     }
 }

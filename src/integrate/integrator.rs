@@ -50,6 +50,16 @@ pub struct StepReport {
     pub cg_time_s: f64,
     pub cg_flops: f64,
     pub cg_bytes: f64,
+    /// The linear path the implicit step ran (`None` for a method without linear solves).
+    pub linear_path: Option<super::LinearPath>,
+    /// Wall time (s) preparing the linear solves' `M^-1`: the Cholesky factorisations on the
+    /// direct path, the multigrid hierarchy's builds and updates on PCG.
+    pub setup_time_s: f64,
+    /// Wall time (s) assembling the linearised systems (Jacobians, drags, contact springs).
+    pub assembly_time_s: f64,
+    /// Numeric Cholesky factorisations and symbolic analyses (the direct path).
+    pub factorisations: u32,
+    pub analyses: u32,
     /// The impulse (N s) each vertex received from its constraint filter during the step,
     /// `(I - S)(M dv - h f)`, when the method knows it (implicit: from the system it solved, so
     /// it holds no linearisation error); empty otherwise. Entries of free vertices are zero.
@@ -73,6 +83,11 @@ impl StepReport {
         self.cg_time_s = 0.0;
         self.cg_flops = 0.0;
         self.cg_bytes = 0.0;
+        self.linear_path = None;
+        self.setup_time_s = 0.0;
+        self.assembly_time_s = 0.0;
+        self.factorisations = 0;
+        self.analyses = 0;
         self.constraint_impulses.clear();
         self.contact_forces.clear();
         self.moving_friction.clear();

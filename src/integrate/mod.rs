@@ -21,7 +21,7 @@ pub use contact::ContactSpring;
 pub use dynamics::{Constraints, Dynamics};
 pub use explicit::{Euler, ExplicitEuler, SymplecticEuler};
 pub use friction::{Friction, STICK_SPEED};
-pub use implicit::{Implicit, ImplicitSettings};
+pub use implicit::{Implicit, ImplicitSettings, LinearPath, LinearSolver};
 pub use integrator::{Capabilities, Integrator, StepReport};
 pub use kind::IntegratorKind;
 pub use rk4::Rk4;

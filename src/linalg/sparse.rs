@@ -74,6 +74,7 @@ impl PatternBuilder {
             zero: true,
             pattern: NEXT_PATTERN.fetch_add(1, Ordering::Relaxed),
             edits: Edits::default(),
+            version: 0,
         }
     }
 }
@@ -93,6 +94,9 @@ pub struct BlockCsr {
     /// Which rows changed since [`BlockCsr::clear_edits`]: lets a copy derived from the matrix
     /// row by row (the multigrid's filtered finest level) redo only those rows.
     edits: Edits,
+    /// Counts the writes to the values: what was computed from them (a Cholesky factor) is
+    /// current while the count is the one it was computed at.
+    version: u64,
 }
 
 /// The rows a [`BlockCsr`]'s values changed in: a list while only [`BlockCsr::add`] touched
@@ -131,6 +135,11 @@ impl BlockCsr {
         self.pattern
     }
 
+    /// Changes whenever a value may have changed (see [`BlockCsr::version`]'s field).
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
     pub fn nnz_blocks(&self) -> usize {
         self.cols.len()
     }
@@ -165,6 +174,7 @@ impl BlockCsr {
     /// Adds `m` to block (i, j); the edit log records row `i`.
     #[inline]
     pub fn add(&mut self, i: u32, j: u32, m: Mat3) {
+        self.version = self.version.wrapping_add(1);
         let s = self.slot(i, j);
         self.vals[s] += m;
         self.zero = false;
@@ -176,6 +186,7 @@ impl BlockCsr {
     /// Adds `m` at a cached slot (assembly); the edit log then counts every row as changed.
     #[inline]
     pub fn add_at(&mut self, slot: usize, m: Mat3) {
+        self.version = self.version.wrapping_add(1);
         self.vals[slot] += m;
         self.zero = false;
         if !self.edits.all {
@@ -215,6 +226,7 @@ impl BlockCsr {
 
     /// Copies the values of `other`, which has the same pattern.
     pub fn assign(&mut self, other: &BlockCsr) {
+        self.version = self.version.wrapping_add(1);
         debug_assert_eq!(self.cols.len(), other.cols.len());
         if !(self.zero && other.zero) {
             let n = self.vals.len();
@@ -237,6 +249,7 @@ impl BlockCsr {
     }
 
     pub fn clear(&mut self) {
+        self.version = self.version.wrapping_add(1);
         if !self.zero {
             self.vals.iter_mut().for_each(|v| *v = Mat3::ZERO);
         }
@@ -246,6 +259,7 @@ impl BlockCsr {
 
     /// Sets `self = a * self + b * other` (same pattern).
     pub fn axpby(&mut self, a: f64, b: f64, other: &BlockCsr) {
+        self.version = self.version.wrapping_add(1);
         debug_assert_eq!(self.cols.len(), other.cols.len());
         let n = self.vals.len();
         if other.zero {
@@ -271,6 +285,7 @@ impl BlockCsr {
     /// order and adding only into its own rows (a pair across the split is evaluated by both):
     /// every block gets its terms in pair order, so the sum is the one pass's, bit for bit.
     pub fn add_pairs(&mut self, slots: &[[usize; 4]], block: impl Fn(usize) -> Mat3 + Sync) {
+        self.version = self.version.wrapping_add(1);
         self.zero = false;
         self.edits.everything();
         let n = self.rows();
@@ -306,6 +321,7 @@ impl BlockCsr {
 
     /// Adds `d[i] * I` to each diagonal block.
     pub fn add_diagonal(&mut self, d: &[f64]) {
+        self.version = self.version.wrapping_add(1);
         for (i, &di) in d.iter().enumerate() {
             self.vals[self.diag[i]] += Mat3::from_diagonal(Vec3::splat(di));
         }

@@ -13,6 +13,7 @@
 //! coordinates `uv` are in metres), over every triangle edge; the frame reports the largest.
 
 use crate::cloth::Cloth;
+use crate::integrate::LinearPath;
 use crate::ros::msg::{DiagnosticArray, DiagnosticStatus, Header, KeyValue, Time};
 use crate::sim::StepMetrics;
 use serde::{Deserialize, Serialize};
@@ -56,6 +57,10 @@ pub struct FrameQuality {
     pub pinched_vertices: usize,
     /// The pinch's grip normal force at the last step (N; see [`StepMetrics`]).
     pub grip_normal_force: f64,
+    /// The implicit step's linear path at the last step (`None`: an explicit method), and the
+    /// Cholesky factorisations of the direct path.
+    pub linear_path: Option<LinearPath>,
+    pub factorisations: u64,
 }
 
 impl FrameQuality {
@@ -79,6 +84,8 @@ impl FrameQuality {
         self.kinetic_energy = m.kinetic_energy;
         self.potential_energy = m.potential_energy;
         self.wall_time_s += m.wall_time_s;
+        self.linear_path = m.linear_path;
+        self.factorisations += u64::from(m.factorisations);
         if let Some(n) = m.strain_limited {
             *self.strain_limited.get_or_insert(0) += u64::from(n);
         }
@@ -88,7 +95,7 @@ impl FrameQuality {
     }
 
     /// The next window's start: no steps yet, the state values (time, contacts, vertices on
-    /// their way out, self-intersections, energies, edge stretch) kept until a step replaces
+    /// their way out, self-intersections, energies, edge stretch, linear path) kept until a step replaces
     /// them.
     pub fn next_window(&self) -> FrameQuality {
         FrameQuality {
@@ -100,6 +107,7 @@ impl FrameQuality {
             self_intersections: self.self_intersections,
             kinetic_energy: self.kinetic_energy,
             potential_energy: self.potential_energy,
+            linear_path: self.linear_path,
             ..FrameQuality::default()
         }
     }
@@ -232,6 +240,13 @@ pub const METRICS: &[(&str, Value)] = &[
     }),
     ("strain_limit_excess", |q| {
         (q.strain_limited.is_some()).then(|| q.strain_limit_excess.to_string())
+    }),
+    // Only on the direct linear path (PCG's runs keep their bytes).
+    ("linear_path", |q| {
+        (q.linear_path == Some(LinearPath::Direct)).then(|| LinearPath::Direct.name().to_string())
+    }),
+    ("factorisations", |q| {
+        (q.factorisations > 0).then(|| q.factorisations.to_string())
     }),
     // Only while there are any.
     ("exiting_vertices", |q| {

@@ -100,11 +100,14 @@ pub fn build_with_robot(scene: &Scene) -> Result<(Simulation, Option<RobotDriver
 
     let plan = scene.effect_plan();
     let effects = plan.build(&cloth, &Lattice(&cloth));
-    let integrator = scene.solver.integrator.build(ImplicitSettings {
-        cg_tolerance: scene.solver.cg_tolerance,
-        cg_max_iterations: scene.solver.cg_max_iterations,
-        linearisation_tolerance: scene.solver.linearisation_tolerance,
-    });
+    let integrator = scene.solver.integrator.build_with(
+        ImplicitSettings {
+            cg_tolerance: scene.solver.cg_tolerance,
+            cg_max_iterations: scene.solver.cg_max_iterations,
+            linearisation_tolerance: scene.solver.linearisation_tolerance,
+        },
+        scene.solver.linear,
+    );
     let settings = StepSettings {
         dt: scene.solver.dt,
         substeps: scene.solver.substeps,

@@ -28,7 +28,7 @@ use crate::collide::{CollisionSpec, ObstacleSpec};
 /// An effect a scene can ask for (the effect plan's term, see [`crate::effects::EffectKind`]).
 pub use crate::effects::EffectKind;
 use crate::effects::{Gust, WindKey};
-use crate::integrate::{ImplicitSettings, IntegratorKind};
+use crate::integrate::{ImplicitSettings, IntegratorKind, LinearSolver};
 use crate::sim::GuardSettings;
 use crate::{Pose, Vec3};
 use serde::{Deserialize, Serialize};
@@ -52,6 +52,9 @@ pub struct SolverSpec {
     /// above which Newton iterations follow the solve.
     #[serde(default = "ImplicitSettings::default_linearisation")]
     pub linearisation_tolerance: f64,
+    /// Implicit: how the linear systems are solved (`auto`, `pcg` or `direct`).
+    #[serde(default)]
+    pub linear: LinearSolver,
     #[serde(default)]
     pub guard: GuardSettings,
 }
@@ -81,6 +84,7 @@ impl Default for SolverSpec {
             cg_tolerance: ImplicitSettings::default().cg_tolerance,
             cg_max_iterations: ImplicitSettings::default().cg_max_iterations,
             linearisation_tolerance: ImplicitSettings::default().linearisation_tolerance,
+            linear: LinearSolver::Pcg,
             guard: GuardSettings::default(),
         }
     }

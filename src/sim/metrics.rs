@@ -3,7 +3,7 @@
 
 use super::limit::LimitPass;
 use crate::collide::{CollisionReport, SelfContactReport};
-use crate::integrate::StepReport;
+use crate::integrate::{LinearPath, StepReport};
 
 /// What one frame step did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -29,6 +29,15 @@ pub struct StepMetrics {
     pub cg_time_s: f64,
     pub cg_flops: f64,
     pub cg_bytes: f64,
+    /// The implicit step's linear path (last substep; `None` for explicit methods).
+    pub linear_path: Option<LinearPath>,
+    /// Wall time (s) of the linear solves' setup (Cholesky factorisations or multigrid
+    /// updates) and of assembling the systems (see [`StepReport::setup_time_s`]).
+    pub setup_time_s: f64,
+    pub assembly_time_s: f64,
+    /// Numeric Cholesky factorisations and symbolic analyses (the direct path).
+    pub factorisations: u32,
+    pub analyses: u32,
     pub kinetic_energy: f64,
     pub potential_energy: f64,
     pub max_speed: f64,
@@ -77,6 +86,11 @@ impl StepMetrics {
         self.cg_time_s += stats.cg_time_s;
         self.cg_flops += stats.cg_flops;
         self.cg_bytes += stats.cg_bytes;
+        self.linear_path = stats.linear_path;
+        self.setup_time_s += stats.setup_time_s;
+        self.assembly_time_s += stats.assembly_time_s;
+        self.factorisations += stats.factorisations;
+        self.analyses += stats.analyses;
     }
 
     /// Sets the last substep's pinched vertices and grip normal force (N).

@@ -25,14 +25,16 @@
 //! [`super::cg`], the multigrid [`super::precond`].
 
 mod assembly;
+mod direct;
 mod hierarchy;
 mod holds;
 mod newton;
+mod path;
 mod refit;
 mod settings;
 mod solve;
 mod solver;
 mod step;
 
-pub use settings::ImplicitSettings;
+pub use settings::{ImplicitSettings, LinearPath, LinearSolver};
 pub use solver::Implicit;

@@ -45,3 +45,45 @@ pub enum Preconditioner {
     /// Smoothed-aggregation multigrid, falling back to block Jacobi when its setup fails.
     Multigrid,
 }
+
+/// How the implicit step solves its linear systems (`solver.linear` in a scene file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolver {
+    /// The cheaper of the two for the cloth, from the costs its first solves measure (see
+    /// `implicit::path`).
+    Auto,
+    /// Conjugate gradients preconditioned by the multigrid hierarchy: the default, the cheaper
+    /// path on every benchmark scene but the smallest (`cargo bench --bench contact`).
+    #[default]
+    Pcg,
+    /// A sparse Cholesky factorisation of the filtered system per changed matrix.
+    Direct,
+}
+
+impl LinearSolver {
+    pub fn name(self) -> &'static str {
+        match self {
+            LinearSolver::Auto => "auto",
+            LinearSolver::Pcg => "pcg",
+            LinearSolver::Direct => "direct",
+        }
+    }
+}
+
+/// The linear path a step ran (what `auto` chose, or what the scene asked for).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LinearPath {
+    #[default]
+    Pcg,
+    Direct,
+}
+
+impl LinearPath {
+    pub fn name(self) -> &'static str {
+        match self {
+            LinearPath::Pcg => "pcg",
+            LinearPath::Direct => "direct",
+        }
+    }
+}

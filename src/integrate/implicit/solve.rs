@@ -2,7 +2,7 @@
 //! across steps (block Jacobi when it cannot be built or breaks down).
 
 use super::hierarchy::{Hierarchy, Pending, REBUILD_EVERY, REFRESH_COST};
-use super::settings::Preconditioner;
+use super::settings::{LinearPath, Preconditioner};
 use super::solver::Implicit;
 use crate::integrate::cg::SolveStats;
 use crate::integrate::precond::Multigrid;
@@ -28,6 +28,22 @@ pub(super) enum SolveKind {
 }
 
 impl Implicit {
+    /// Solves `A dv = b` with the constrained part `z` (dv holds the start) on the step's linear
+    /// path (see `path.rs`); the direct path hands a solve it cannot do to PCG.
+    pub(super) fn solve(&mut self, filt: &[Filter], kind: SolveKind, tol: f64) -> SolveStats {
+        if self.path == LinearPath::Direct {
+            if let Some(stats) = self.solve_direct(filt, kind, tol) {
+                return stats;
+            }
+        }
+        let stats = self.solve_pcg(filt, kind, tol);
+        if stats.iterations > 0 {
+            self.auto.iterations += stats.iterations;
+            self.auto.solves += 1;
+        }
+        stats
+    }
+
     /// Solves `A dv = b` with the constrained part `z` (dv holds the start). A start that meets
     /// `tol` already (an active-set round that moved the answer less than that) returns at once:
     /// no preconditioner update, and the rebuild schedule counts only solves that iterate.
@@ -40,7 +56,7 @@ impl Implicit {
     /// steps would be as cheap on the 20 m/s rod of `cargo bench --bench fast_links`, but more
     /// than doubles the CG iterations of S1 64x64 (`cargo bench --bench contact`), whose splits
     /// land the cloth on the ball.
-    pub(super) fn solve(&mut self, filt: &[Filter], kind: SolveKind, tol: f64) -> SolveStats {
+    fn solve_pcg(&mut self, filt: &[Filter], kind: SolveKind, tol: f64) -> SolveStats {
         let max_it = self.settings.cg_max_iterations;
         let short = self.short_step;
         let history = kind == SolveKind::First;
@@ -58,7 +74,9 @@ impl Implicit {
             // than the tolerance): no preconditioner update, and nothing for the schedule.
             return done;
         }
+        let clock = std::time::Instant::now();
         let use_mg = self.update_hierarchy(filt, short, kind).is_some();
+        let setup_seconds = clock.elapsed().as_secs_f64();
         let Some(a) = self.a.as_ref() else {
             unreachable!("prepared by the step");
         };
@@ -66,7 +84,9 @@ impl Implicit {
             Some(h) if use_mg => Some(&mut h.mg),
             _ => None,
         };
-        let mut stats = self.pcg.iterate(a, filt, mgref, tol, max_it, &mut self.dv);
+        let mut stats = self
+            .pcg
+            .iterate(a, filt, mgref.into(), tol, max_it, &mut self.dv);
         if use_mg && (stats.residual.is_nan() || stats.residual > tol) && stats.iterations < max_it
         {
             // The multigrid-preconditioned iteration broke down early (degenerate input): retry
@@ -86,6 +106,7 @@ impl Implicit {
                 None,
             );
         }
+        stats.setup_seconds = setup_seconds;
         if let Some(h) = self.hierarchy.as_mut().filter(|_| history && !short) {
             let its = stats.iterations;
             if h.pending != Pending::None {

@@ -2,8 +2,10 @@
 //! multigrid hierarchy, the warm-start history, scratch vectors) and its [`Integrator`] face.
 //! A step itself is `step.rs`.
 
+use super::direct::Direct;
 use super::hierarchy::Hierarchy;
-use super::settings::{ImplicitSettings, Preconditioner};
+use super::path::AutoPath;
+use super::settings::{ImplicitSettings, LinearPath, LinearSolver, Preconditioner};
 use crate::effects::EffectSet;
 use crate::integrate::cg::Pcg;
 use crate::integrate::friction::Drag;
@@ -24,6 +26,13 @@ pub struct Implicit {
     pub(super) short_step: bool,
     pub(super) settings: ImplicitSettings,
     pub(super) preconditioner: Preconditioner,
+    /// The scene's choice of linear path, the path the current step runs, and what `auto`
+    /// decides it from.
+    pub(super) linear: LinearSolver,
+    pub(super) path: LinearPath,
+    pub(super) auto: AutoPath,
+    /// The direct path's Cholesky factor with its cached symbolic analysis.
+    pub(super) direct: Direct,
     /// df/dx, then reused in place as the system matrix A.
     pub(super) a: Option<BlockCsr>,
     pub(super) dfdv: Option<BlockCsr>,
@@ -75,11 +84,23 @@ impl Implicit {
         Self::with_preconditioner(settings, Preconditioner::Multigrid)
     }
 
+    /// An implicit solver on the given linear path (`solver.linear`).
+    pub fn with_linear(settings: ImplicitSettings, linear: LinearSolver) -> Self {
+        Self {
+            linear,
+            ..Self::new(settings)
+        }
+    }
+
     pub fn with_preconditioner(settings: ImplicitSettings, preconditioner: Preconditioner) -> Self {
         Self {
             short_step: false,
             settings,
             preconditioner,
+            linear: LinearSolver::Pcg,
+            path: LinearPath::Pcg,
+            auto: AutoPath::default(),
+            direct: Direct::default(),
             a: None,
             dfdv: None,
             constant: None,

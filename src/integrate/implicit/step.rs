@@ -12,6 +12,7 @@ use crate::integrate::integrator::{Integrator, StepReport};
 use crate::integrate::Dynamics;
 use crate::linalg::{scratch, Filter};
 use crate::Vec3;
+use std::time::Instant;
 
 /// Solves at most with friction drags refitted to the sliding speed (see [`crate::integrate::friction`]).
 const MAX_REFITS: u32 = 2;
@@ -71,7 +72,11 @@ impl Implicit {
                 .filter(|&(i, _)| i < n && filter[i] == Filter::Free),
         );
         let filt = &mut filter;
+        let clock = Instant::now();
         self.assemble(d, &State { t, x, v }, h);
+        report.assembly_time_s = clock.elapsed().as_secs_f64();
+        self.choose_path();
+        report.linear_path = Some(self.path);
         // Constrained components of dv are fixed: z = (I - S)(v_target - v).
         for i in 0..n {
             self.z[i] = filt[i].constrained(d.constraints.target_velocity[i] - v[i]);
@@ -79,6 +84,7 @@ impl Implicit {
         // The start directions: the last two steps' velocity changes.
         self.last.clone_from(&self.dv);
         (report.cg_time_s, report.cg_flops, report.cg_bytes) = (0.0, 0.0, 0.0);
+        (report.setup_time_s, report.factorisations, report.analyses) = (0.0, 0, 0);
         // Active sets to settle: their rounds solve to `ACTIVE_SET_TOLERANCE`, then the answer is
         // polished to the scene's tolerance and gets the rounds again (see `ACTIVE_SET_TOLERANCE`).
         let tight = self.settings.cg_tolerance;
@@ -165,6 +171,7 @@ impl Implicit {
             }
             newton += 1;
             let (xk, vk) = (std::mem::take(&mut self.xk), std::mem::take(&mut self.vk));
+            let clock = Instant::now();
             self.assemble_matrix(
                 d,
                 &State {
@@ -174,6 +181,7 @@ impl Implicit {
                 },
                 h,
             );
+            report.assembly_time_s += clock.elapsed().as_secs_f64();
             self.x_lin.clone_from(&xk);
             (self.xk, self.vk) = (xk, vk);
             // Solve for the correction: `b` holds `-g`, and the constrained part is met already.
@@ -269,10 +277,13 @@ impl Implicit {
     }
 }
 
-/// Adds one solve's iteration time and work to the step's report.
+/// Adds one solve's iteration time and work, and its setup, to the step's report.
 fn tally(report: &mut StepReport, s: &SolveStats) {
     let its = f64::from(s.iterations);
     report.cg_time_s += s.seconds;
+    report.setup_time_s += s.setup_seconds;
+    report.factorisations += s.factorisations;
+    report.analyses += s.analyses;
     report.cg_flops += s.flops * its;
     report.cg_bytes += s.bytes * its;
 }
