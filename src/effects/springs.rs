@@ -115,9 +115,13 @@ impl Springs {
         }
     }
 
-    /// These springs with the knees `knee` (one per spring, `None` for a linear one; see
-    /// [`Knee`]). Springs none of which has a knee stay on the linear pass.
+    /// These springs with the knees `knee` (one per spring, `None` for a linear one, or empty
+    /// when none has one; see [`Knee`]). Springs none of which has a knee stay on the linear
+    /// pass.
     pub fn with_knee(mut self, knee: &[Option<Knee>]) -> Self {
+        if knee.iter().all(Option::is_none) {
+            return self;
+        }
         debug_assert_eq!(knee.len(), self.springs.len());
         let at: Vec<KneeAt> = (self.springs.iter().zip(&self.k))
             .zip(knee.iter().chain(std::iter::repeat(&None)))

@@ -16,25 +16,8 @@
 use super::solve::SolveKind;
 use super::solver::Implicit;
 use crate::integrate::cg::{Precond, SolveStats};
-use crate::linalg::{BlockCsr, Filter, FilteredCholesky};
+use crate::linalg::Filter;
 use std::time::Instant;
-
-/// The factor and what it was computed from.
-#[derive(Debug, Default)]
-pub(super) struct Direct {
-    pub(super) chol: FilteredCholesky,
-    /// `(pattern, version)` of the matrix the factor holds, and its filter.
-    factored: Option<(u64, u64)>,
-    filter: Vec<Filter>,
-}
-
-impl Direct {
-    fn is_current(&self, a: &BlockCsr, filt: &[Filter]) -> bool {
-        self.chol.has_factor()
-            && self.factored == Some((a.pattern_id(), a.version()))
-            && self.filter.as_slice() == filt
-    }
-}
 
 impl Implicit {
     /// One solve on the direct path (see the module's doc). `None` when the factorisation

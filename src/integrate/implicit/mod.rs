@@ -25,7 +25,9 @@
 //! [`super::cg`], the multigrid [`super::precond`].
 
 mod assembly;
+mod auto;
 mod direct;
+mod factor;
 mod hierarchy;
 mod holds;
 mod newton;

@@ -24,16 +24,6 @@ const SOLVE_SECONDS_PER_VALUE: f64 = 3.3e-9;
 /// Steps in a row the direct path must be predicted cheaper before `auto` takes it.
 const SWITCH_STEPS: u32 = 3;
 
-/// What `auto` knows: the PCG counts of the current step, the steps the direct path was
-/// predicted cheaper in a row, and the pattern it moved to the direct path for.
-#[derive(Debug, Default)]
-pub(super) struct AutoPath {
-    pub(super) iterations: u32,
-    pub(super) solves: u32,
-    cheaper: u32,
-    direct_for: Option<u64>,
-}
-
 impl Implicit {
     /// Sets the path of the step about to solve (its matrix assembled), reading the last
     /// step's counts when `auto` decides.

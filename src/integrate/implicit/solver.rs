@@ -2,9 +2,9 @@
 //! multigrid hierarchy, the warm-start history, scratch vectors) and its [`Integrator`] face.
 //! A step itself is `step.rs`.
 
-use super::direct::Direct;
+use super::auto::AutoPath;
+use super::factor::Direct;
 use super::hierarchy::Hierarchy;
-use super::path::AutoPath;
 use super::settings::{ImplicitSettings, LinearPath, LinearSolver, Preconditioner};
 use crate::effects::EffectSet;
 use crate::integrate::cg::Pcg;

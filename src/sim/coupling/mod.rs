@@ -44,7 +44,6 @@ use crate::effects::EffectSet;
 use crate::integrate::{Capabilities, Constraints, STICK_SPEED};
 use crate::linalg::Filter;
 use crate::{Pose, Vec3};
-use pinch_springs::Pinch;
 
 /// The coupling's state: this substep's constraints and holds, the lagged forces of the last
 /// solve, and the feedback for the stage.
@@ -87,6 +86,13 @@ pub(super) struct Coupling {
     pinches: Vec<Pinch>,
     /// The last solve's pinched vertices and grip (see [`Coupling::grip`]).
     pub pinch_grip: (usize, f64),
+}
+
+/// A pinched vertex's two springs (`pinch_springs`) (indices into the constraints' contacts).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Pinch {
+    pub vertex: usize,
+    pub springs: [usize; 2],
 }
 
 /// What the coupling reads at the start of a substep.

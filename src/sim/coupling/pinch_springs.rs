@@ -30,7 +30,7 @@
 //! pinched vertices that touch neither side themselves (their cell reaching under the pads'
 //! edges) are pinched by their share too.
 
-use super::{Coupling, StartState};
+use super::{Coupling, Pinch, StartState};
 use crate::collide::CollisionStage;
 use crate::integrate::{ContactSpring, Friction};
 use crate::{Pose, Vec3};
@@ -57,13 +57,6 @@ struct Side {
     end_normal: Vec3,
     /// The plane's material point velocity over the substep (m/s).
     velocity: Vec3,
-}
-
-/// A pinched vertex's two springs (indices into the constraints' contacts).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Pinch {
-    pub vertex: usize,
-    pub springs: [usize; 2],
 }
 
 impl Coupling {
