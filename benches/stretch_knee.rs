@@ -37,16 +37,7 @@ fn load(path: &str, res: Option<usize>, knee: Option<f64>) -> (Simulation, Optio
 }
 
 fn worst_edge(sim: &Simulation) -> f64 {
-    let cl = &sim.cloth;
-    let mut worst: f64 = 0.0;
-    for t in &cl.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            let rest = (cl.uv[a] - cl.uv[b]).length();
-            worst = worst.max((cl.x[a] - cl.x[b]).length() / rest);
-        }
-    }
-    worst
+    1.0 + sim.cloth.max_edge_stretch()
 }
 
 fn run(path: &str, res: Option<usize>, knee: Option<f64>, frames: usize) -> Run {

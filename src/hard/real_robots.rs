@@ -9,6 +9,7 @@
 //! no inside test in the contact stage, so its own penetration figure cannot see a vertex that
 //! went through one).
 
+use super::self_contact::case;
 use super::setup::{fill, impact_stretch_bound, pick, G};
 use super::{Case, Criteria, EnergyCheck, HardError, Resolution};
 use crate::scene::Scene;
@@ -92,26 +93,6 @@ fn criteria(reach: f64, link_speed: f64, fall: f64, area: f64, self_collision: b
     c
 }
 
-fn case(
-    name: &'static str,
-    description: String,
-    scene: &Scene,
-    duration: f64,
-    criteria: Criteria,
-) -> Result<Case, HardError> {
-    let (sim, driver) = scene
-        .build_with_robot()
-        .map_err(|source| HardError::Scene { case: name, source })?;
-    Ok(Case {
-        name,
-        description,
-        sim,
-        driver,
-        duration,
-        criteria,
-    })
-}
-
 /// Waypoints of one swinging joint: at `rest` for `start` s, then to each of `targets` in turn
 /// at `speed` (rad/s), held `hold` s at each; `row(q)` writes a waypoint's positions. Returns the
 /// waypoint lines and the time the last hold ends.
@@ -189,7 +170,7 @@ fn panda_whip(
     let crit = criteria(1.8, 3.5, 0.6, 0.3 * 0.3, self_collision);
     case(
         name,
-        format!(
+        &format!(
             "Franka Panda whipping a 0.3 m towel held 14 cm out from its hand through waypoints \
              at its joint-velocity limits (the elbow folds onto the held corner), self-collision \
              {}",
@@ -242,7 +223,7 @@ fn kuka_whip(name: &'static str, res: Resolution, self_collision: bool) -> Resul
     let crit = criteria(1.6, 8.5, 0.6, 0.4 * 0.4, self_collision);
     case(
         name,
-        format!(
+        &format!(
             "KUKA iiwa whipping a 0.4 m towel held by a corner 7 cm past its flange: the base \
              joint swings +-1.2 rad at 93 % of its velocity limit, self-collision {}",
             on_off(self_collision)
@@ -302,7 +283,7 @@ fn xarm_whip(name: &'static str, res: Resolution, self_collision: bool) -> Resul
     let crit = criteria(1.4, 2.7, 0.6, 0.3 * 0.3, self_collision);
     case(
         name,
-        format!(
+        &format!(
             "UFactory xArm6 swinging a 0.3 m towel held 6 cm off its flange's axis: base and \
              flange joints at their 3.14 rad/s limit, +-1.5 rad, self-collision {}",
             on_off(self_collision)
@@ -359,8 +340,7 @@ pub(super) fn xarm_self_wipe(res: Resolution) -> Result<Case, HardError> {
         name,
         "UFactory xArm6 wiping a towel off a table with its flange, which sweeps across the \
          table top through the towel's contact layer at the base joint's 3.14 rad/s limit and \
-         back, self-collision on"
-            .into(),
+         back, self-collision on",
         &s,
         end,
         crit,
@@ -418,8 +398,7 @@ pub(super) fn panda_self_towel_pick(res: Resolution) -> Result<Case, HardError> 
         name,
         "Franka Panda picking a towel from a table by one corner with the grasp rule (the \
          fingers close on it), lifting it, carrying it and opening over the table, \
-         self-collision on"
-            .into(),
+         self-collision on",
         &s,
         3.0,
         crit,

@@ -32,7 +32,8 @@ fn self_on(s: &mut Scene) {
     s.collision.count_self_intersections = true;
 }
 
-fn case(
+/// A case of a scene with its robot driver.
+pub(super) fn case(
     name: &'static str,
     description: &str,
     scene: &Scene,
