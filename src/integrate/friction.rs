@@ -19,6 +19,9 @@
 //!   from the next substep on (with modes decided from the slip alone, its slip would grow by
 //!   only `F / (mu N)` per substep until it slid: dozens of substeps just above the limit).
 //!
+//! A pinch's vertices on one side (see [`Friction::patch`]) are fitted and refitted as one
+//! patch, on their summed load and limit ([`fit_patches`], [`overloaded`]).
+//!
 //! `N` lags one substep (IPC's lagged friction), and so does the mode: it is chosen before the
 //! solve from the slip at the start of the step and the tangential load the rest of the system
 //! put on the vertex in the last step (see [`Drag::fit`]): a sticker whose drag held more than
@@ -61,6 +64,10 @@ pub struct Friction {
     /// limit at the step's end still slides, see [`Drag::overloaded`]). `None`: in the
     /// filter's free directions.
     pub normal: Option<Vec3>,
+    /// The pinch this friction grips in (this side's obstacle, the facing one's), or `None`.
+    /// A pinch's frictions on one side stick or slide together, on their summed load against
+    /// their summed limit (see [`fit_patches`]).
+    pub patch: Option<[u32; 2]>,
 }
 
 /// How a vertex's friction acts during a step.
@@ -83,6 +90,10 @@ pub(crate) struct Drag {
     /// surface's tangent plane `I - n n^T` for a contact point (symmetric positive
     /// semi-definite either way).
     tangent: Mat3,
+    /// The pinch patch it belongs to (see [`Friction::patch`]).
+    patch: Option<[u32; 2]>,
+    /// The tangential load (N) it was fitted against.
+    load: Vec3,
 }
 
 impl Drag {
@@ -116,6 +127,7 @@ impl Drag {
             h_over_m,
             load,
         );
+        d.patch = f.patch;
         if f.normal.is_some() && matches!(d.mode, Mode::Sticking { .. }) {
             d.mode = Mode::Sticking {
                 c: f.limit / STICK_SPEED,
@@ -158,6 +170,8 @@ impl Drag {
             reference,
             mode: Mode::Sticking { c: 0.0 },
             tangent,
+            patch: None,
+            load: tangent * load,
         };
         let slip = d.slip(v);
         d.mode = Mode::Sticking {
@@ -175,6 +189,16 @@ impl Drag {
 
     fn slip(&self, v: Vec3) -> Vec3 {
         self.tangent * (v - self.reference)
+    }
+
+    /// Sliding along a patch's slip `slip` (not the vertex's own): Coulomb's force along
+    /// it, and the turning damping of that speed.
+    fn sliding_at(&self, slip: Vec3) -> Mode {
+        let speed = slip.length().max(STICK_SPEED);
+        Mode::Sliding {
+            direction: slip / slip.length().max(f64::MIN_POSITIVE),
+            across: self.limit / speed,
+        }
     }
 
     fn sliding(&self, slip: Vec3) -> Mode {
@@ -248,6 +272,97 @@ impl Drag {
             _ => self.refit(v),
         }
     }
+}
+
+/// Fits the modes of the pinch patches' drags together (see [`Friction::patch`]): the cloth
+/// between two pads is far stiffer in its plane than the friction that holds it, so it sticks
+/// or slides as one piece, when the summed tangential load exceeds the summed limit
+/// `mu (N_1 + ... + N_k)`. Fitted vertex by vertex, the few vertices where a hanging towel's
+/// pull enters the pad would carry most of it, each slide on past its own share of the grip,
+/// and the towel creep out of a grip three times its weight. The patch slides as one vertex of
+/// the patch's mass would (see [`Drag::fit`]), at its mass-weighted mean slip; sticking, each
+/// member keeps its firm drag. `v` and `mass` are per vertex, `h` the step.
+pub(crate) fn fit_patches(drags: &mut [Drag], v: &[Vec3], mass: &[f64], h: f64) {
+    for (_, members) in patches(drags) {
+        let (mut m, mut limit, mut load, mut slip) = (0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
+        for &k in &members {
+            let g = &drags[k];
+            let mi = mass.get(g.vertex).copied().unwrap_or(0.0);
+            m += mi;
+            limit += g.limit;
+            load += g.load;
+            slip += g.slip(v.get(g.vertex).copied().unwrap_or(Vec3::ZERO)) * mi;
+        }
+        if !(m > 0.0 && limit > 0.0) {
+            continue;
+        }
+        let slip = slip / m;
+        let speed = slip.length();
+        let slides = speed > STICK_SPEED && speed + h / m * (load.dot(slip / speed) - limit) > 0.0;
+        for &k in &members {
+            let g = &mut drags[k];
+            g.mode = if slides {
+                g.sliding_at(slip)
+            } else {
+                Mode::Sticking {
+                    c: g.limit / STICK_SPEED,
+                }
+            };
+        }
+    }
+}
+
+/// The drags' new modes where the iterate's velocities (`at` a vertex) overload their
+/// stickers (see [`Drag::overloaded`]), as (index into `drags`, mode): a pinch patch
+/// slides when its summed drag exceeds [`OVERSHOOT`] times its summed limit, all its members
+/// along their mass-weighted mean slip (`mass` per vertex); patches only when `patches_too`.
+pub(crate) fn overloaded(
+    drags: &[Drag],
+    at: impl Fn(usize) -> Vec3,
+    mass: &[f64],
+    patches_too: bool,
+) -> Vec<(usize, Mode)> {
+    let mut out: Vec<(usize, Mode)> = (drags.iter().enumerate())
+        .filter(|(_, g)| g.patch.is_none())
+        .filter_map(|(k, g)| g.overloaded(at(g.vertex)).map(|mode| (k, mode)))
+        .collect();
+    if !patches_too {
+        return out;
+    }
+    for (_, members) in patches(drags) {
+        let (mut m, mut limit, mut drag, mut slip) = (0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
+        let mut sticking = true;
+        for &k in &members {
+            let g = &drags[k];
+            let (vi, mi) = (at(g.vertex), mass.get(g.vertex).copied().unwrap_or(0.0));
+            sticking &= matches!(g.mode, Mode::Sticking { .. });
+            m += mi;
+            limit += g.limit;
+            drag += g.force(vi);
+            slip += g.slip(vi) * mi;
+        }
+        if !sticking || m <= 0.0 || drag.length() <= OVERSHOOT * limit {
+            continue;
+        }
+        let slip = slip / m;
+        if slip.length() > 0.0 {
+            out.extend(members.iter().map(|&k| (k, drags[k].sliding_at(slip))));
+        }
+    }
+    out
+}
+
+/// The pinch patches among `drags`: each patch's key and its members' indices.
+fn patches(drags: &[Drag]) -> Vec<([u32; 2], Vec<usize>)> {
+    let mut out: Vec<([u32; 2], Vec<usize>)> = Vec::new();
+    for (k, g) in drags.iter().enumerate() {
+        let Some(key) = g.patch else { continue };
+        match out.iter_mut().find(|p| p.0 == key) {
+            Some(p) => p.1.push(k),
+            None => out.push((key, vec![k])),
+        }
+    }
+    out
 }
 
 /// Adds `h (-df/dv)` of every drag to the diagonal blocks of `a`.

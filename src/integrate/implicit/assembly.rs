@@ -82,6 +82,7 @@ impl Implicit {
                     .then(|| Drag::fit(f, &filt[i], s.v[i], h / d.mass[i], load))
                     .flatten()
             }));
+        friction::fit_patches(&mut self.drags, s.v, d.mass, h);
         friction::add_to_matrix(a, &self.drags, h);
         for g in &self.drags {
             self.b[g.vertex] += g.force(s.v[g.vertex]) * h;

@@ -7,7 +7,7 @@
 use super::assembly::spring_terms;
 use super::solver::Implicit;
 use crate::effects::State;
-use crate::integrate::Dynamics;
+use crate::integrate::{friction, Dynamics};
 use crate::Vec3;
 
 impl Implicit {
@@ -75,22 +75,25 @@ impl Implicit {
     /// Makes held vertices' stickers that the iterate `v0 + dv` overloads slide (see
     /// `Drag::overloaded`): what the lagged choice before the solve missed, a load that rose
     /// within the step (a cloth edge shoved by a robot link); returns whether any changed (the
-    /// system then needs a new solve).
-    pub(super) fn refit_drags(&mut self, v0: &[Vec3], h: f64) -> bool {
+    /// system then needs a new solve). Pinch patches only on an answer solved to the scene's
+    /// tolerance (`tight`): their sticking drags are so stiff (`mu N / STICK_SPEED`) that the
+    /// loose answer of the first rounds overloads them falsely, and a patch made to slide
+    /// does not stick again within the step: a towel carried in a grip three times its weight
+    /// slid out of it.
+    pub(super) fn refit_drags(&mut self, v0: &[Vec3], mass: &[f64], h: f64, tight: bool) -> bool {
         let Some(a) = self.a.as_mut() else {
             return false;
         };
-        let mut changed = false;
-        for g in self.drags.iter_mut() {
+        let dv = &self.dv;
+        let refits = friction::overloaded(&self.drags, |i| v0[i] + dv[i], mass, tight);
+        let changed = !refits.is_empty();
+        for (k, mode) in refits {
+            let g = &mut self.drags[k];
             let i = g.vertex;
-            let Some(mode) = g.overloaded(v0[i] + self.dv[i]) else {
-                continue;
-            };
             let (old_force, old_damping) = (g.force(v0[i]), g.damping());
             g.mode = mode;
             a.add(i as u32, i as u32, (g.damping() - old_damping) * h);
             self.b[i] += (g.force(v0[i]) - old_force) * h;
-            changed = true;
         }
         changed
     }

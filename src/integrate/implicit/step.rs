@@ -108,7 +108,9 @@ impl Implicit {
         loop {
             let mut changed = false;
             if rounds < MAX_REFITS {
-                let (c, impulses) = self.refit_active_sets(filt, d, &State { t, x, v }, h, holds);
+                let state = State { t, x, v };
+                let (c, impulses) =
+                    self.refit_active_sets(filt, d, &state, h, (holds, tol <= tight));
                 (changed, impulses_current) = (c, impulses_current || impulses);
             }
             if changed {
@@ -238,17 +240,18 @@ impl Implicit {
     /// One round of the step's active sets on the current answer: friction drags, contact
     /// springs, edge springs' drags and (`holds`) the held vertices, whose impulses it computes.
     /// Returns whether any changed (the system then needs a new solve) and whether the
-    /// impulses are those of the current answer.
+    /// impulses are those of the current answer. `tight`: the answer is solved to the scene's
+    /// tolerance (pinch patches are refitted only then, see `refit_drags`).
     fn refit_active_sets(
         &mut self,
         filt: &mut [Filter],
         d: &Dynamics,
         s: &State,
         h: f64,
-        holds: bool,
+        (holds, tight): (bool, bool),
     ) -> (bool, bool) {
         let v = s.v;
-        let drags = self.refit_drags(v, h);
+        let drags = self.refit_drags(v, d.mass, h, tight);
         let springs = self.refit_springs(d, s, h);
         let edge_drags = self.refit_edge_drags(d, v, h);
         let mut released = false;

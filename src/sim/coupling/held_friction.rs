@@ -34,6 +34,7 @@ impl Coupling {
                     limit,
                     reference: *surface,
                     normal: None,
+                    patch: None,
                 });
             }
         }

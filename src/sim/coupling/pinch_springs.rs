@@ -166,7 +166,7 @@ impl Coupling {
         }
         let first = self.constraints.contacts.len();
         let springs = [first, first + 1];
-        for side in [&a, &b] {
+        for (side, facing) in [(&a, b.obstacle), (&b, a.obstacle)] {
             if side.velocity != Vec3::ZERO {
                 self.moving_springs.push(self.constraints.contacts.len());
             }
@@ -179,6 +179,7 @@ impl Coupling {
                     limit: mu * normal_force,
                     reference: side.velocity,
                     normal: Some(side.end_normal),
+                    patch: Some([side.obstacle, facing].map(|o| o as u32)),
                 });
             }
             if solves_friction {
