@@ -74,6 +74,7 @@ scenes! {
     // the solve: the stretch is the arm's, not self-contact's.
     robot_drape_arm: "robot_drape_arm.yaml", 1.2 * 1.70;
     robot_pick_towel: "robot_pick_towel.yaml", super::STRETCH;
+    robot_pinch_towel: "robot_pinch_towel.yaml", super::STRETCH;
     robot_towel: "robot_towel.yaml", super::STRETCH;
     shirt: "shirt.yaml", super::STRETCH;
     sleeve: "sleeve.yaml", super::STRETCH;

@@ -23,6 +23,7 @@ pub const SCENES: &[&str] = &[
     "robot_cape.yaml",
     "robot_drape_arm.yaml",
     "robot_pick_towel.yaml",
+    "robot_pinch_towel.yaml",
     "robot_towel.yaml",
     "shirt.yaml",
     "sleeve.yaml",
