@@ -1,7 +1,8 @@
 //! Picking by contact alone: the bundled `robot_pinch_towel.yaml` (no `grasps:` rule, no
 //! attachment) run as a user would, with self-collision off and on, and judged at every frame
 //! end on the state the step ends in: the fingers close on the towel's overhang, lift it at
-//! least 20 cm, carry it and let it fall when they open; no vertex ever ends inside a finger,
+//! least 20 cm, carry it back over the counter and let go when they open (the towel stays as
+//! the gripper draws back); no vertex ever ends inside a finger,
 //! no step fails, and with self-collision on no two triangles intersect.
 
 #[path = "common/self_check.rs"]
@@ -16,7 +17,8 @@ use std::path::Path;
 const ROUND_OFF: f64 = 1e-12;
 
 /// The trajectory's phases (s): the fingers are closed from `CLOSED`, the lift ends at
-/// `LIFTED`, the carry at `CARRIED`, and they are open again from `OPEN`.
+/// `LIFTED`, the carry at `CARRIED`; they are open again from `OPEN`, when the gripper draws
+/// back.
 const CLOSED: f64 = 1.4;
 const LIFTED: f64 = 2.4;
 const CARRIED: f64 = 3.2;
@@ -54,11 +56,11 @@ struct Pick {
     /// How far the vertex nearest the closed fingers' mid-point when they have closed moves
     /// in the fingers' frame over the lift and carry (m): the grip's slip.
     slip_in_fingers: f64,
-    /// Pinched vertices at the end of the run; how far the towel's centroid fell from the
-    /// opening to the end, and how far its nearest vertex is from the fingers' mid-point
-    /// then (m).
+    /// Pinched vertices at the end of the run; how far the towel's centroid moved from the
+    /// opening to the end, while the gripper drew back, and how far its nearest vertex is from
+    /// the fingers' mid-point then (m).
     pinched_at_end: usize,
-    fall_after_open: f64,
+    moved_after_open: f64,
     gone_from_fingers: f64,
     /// Deepest a vertex ended a frame inside a finger (m; 0: none).
     deepest_in_finger: f64,
@@ -78,7 +80,7 @@ fn pick(self_collision: bool) -> Pick {
     let dt = sim.settings.dt;
     let frames = (scene.duration / dt).round() as usize;
     let top = |x: &[Vec3]| x.iter().map(|p| p.z).fold(f64::MIN, f64::max);
-    let centroid = |x: &[Vec3]| x.iter().map(|p| p.z).sum::<f64>() / x.len().max(1) as f64;
+    let centroid = |x: &[Vec3]| x.iter().copied().sum::<Vec3>() / x.len().max(1) as f64;
     let mut run = Pick {
         start_top: top(&sim.cloth.x),
         least_pinched_carrying: usize::MAX,
@@ -132,7 +134,8 @@ fn pick(self_collision: bool) -> Pick {
             run.max_intersections = run.max_intersections.max(pairs);
         }
     }
-    run.fall_after_open = centroid_at_open.unwrap_or(f64::NAN) - centroid(&sim.cloth.x);
+    run.moved_after_open =
+        (centroid_at_open.unwrap_or(Vec3::NAN) - centroid(&sim.cloth.x)).length();
     run
 }
 
@@ -158,10 +161,12 @@ fn judge(self_collision: bool) {
         r.pinched_at_end, 0,
         "still pinched after the fingers opened"
     );
+    // Let go: the gripper draws back 20 cm and the towel does not follow it (settling on the
+    // counter's edge moves it a few centimetres).
     assert!(
-        r.fall_after_open > 0.05 && r.gone_from_fingers > 0.05,
-        "after the fingers opened the towel fell {:.3} m and is {:.3} m from them",
-        r.fall_after_open,
+        r.moved_after_open < 0.1 && r.gone_from_fingers > 0.1,
+        "after the fingers opened the towel moved {:.3} m and is {:.3} m from them",
+        r.moved_after_open,
         r.gone_from_fingers
     );
     assert!(

@@ -23,5 +23,8 @@ for b in "$bags"/*.mcap; do
   "$drape" render "$b" --out "docs/pictures/$name.png"
 done
 "$drape" render "$bags/robot_towel.mcap" --out docs/pictures/robot_towel_strip.png --frames 5
+# The pick by contact alone: closed on the overhang, lifted, carried, let go.
+"$drape" render "$bags/robot_pinch_towel.mcap" --out docs/pictures/robot_pinch_towel.png \
+  --at 1.3,2.4,3.2,4.5 --size 200x170 --azimuth 50 --elevation 25
 # The README's head: the main command's bag animated (every other frame, 15 per second).
 "$drape" render "$bags/robot_cape.mcap" --out docs/pictures/robot_cape.gif --frames 61

@@ -372,3 +372,55 @@ pub(crate) fn add_to_matrix(a: &mut BlockCsr, drags: &[Drag], h: f64) {
         a.add(i as u32, i as u32, d.damping() * h);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One side of a two-vertex pinch on a plane of normal z, each vertex limited to 1 N, at
+    /// rest, with the tangential loads `loads` (N) of the last step.
+    fn patch(loads: [f64; 2]) -> Vec<Drag> {
+        let filter = Filter::Free;
+        (0..2)
+            .filter_map(|i| {
+                let f = Friction {
+                    vertex: i as u32,
+                    limit: 1.0,
+                    reference: Vec3::ZERO,
+                    normal: Some(Vec3::Z),
+                    patch: Some([0, 1]),
+                };
+                Drag::fit(&f, &filter, Vec3::ZERO, 1.0, Vec3::X * loads[i])
+            })
+            .collect()
+    }
+
+    /// A pinch whose load falls unevenly on its vertices sticks while the sum stays under the
+    /// summed limit (one vertex loaded past its own limit included), and slides along the
+    /// patch's slip once the summed drag at the solved velocity exceeds it.
+    #[test]
+    fn a_pinch_patch_sticks_and_slides_on_its_summed_load_and_limit() {
+        let (mass, h) = ([1e-3; 2], 1e-2);
+        let mut drags = patch([1.5, 0.2]);
+        fit_patches(&mut drags, &[Vec3::ZERO; 2], &mass, h);
+        assert!(drags
+            .iter()
+            .all(|g| matches!(g.mode, Mode::Sticking { .. })));
+        // Solved: the first vertex creeps at 1.5 STICK_SPEED (its drag 1.5 N), the second at
+        // 0.2: together 1.7 N of 2.
+        let v = [Vec3::X * 1.5 * STICK_SPEED, Vec3::X * 0.2 * STICK_SPEED];
+        assert!(overloaded(&drags, |i| v[i], &mass, true).is_empty());
+        // Each alone past the overshoot: 2.6 N of 2 together.
+        let v = [Vec3::X * 1.3 * STICK_SPEED, Vec3::X * 1.3 * STICK_SPEED];
+        let refits = overloaded(&drags, |i| v[i], &mass, true);
+        assert_eq!(refits.len(), 2);
+        for (_, mode) in refits {
+            let Mode::Sliding { direction, .. } = mode else {
+                panic!("{mode:?}");
+            };
+            assert!((direction - Vec3::X).length() < 1e-12);
+        }
+        // Patches are refitted only on the tight answer.
+        assert!(overloaded(&drags, |i| v[i], &mass, false).is_empty());
+    }
+}

@@ -166,6 +166,7 @@ impl Coupling {
         }
         let first = self.constraints.contacts.len();
         let springs = [first, first + 1];
+        let grip = carried_together(&a, &b, s.h, th);
         for (side, facing) in [(&a, b.obstacle), (&b, a.obstacle)] {
             if side.velocity != Vec3::ZERO {
                 self.moving_springs.push(self.constraints.contacts.len());
@@ -179,7 +180,7 @@ impl Coupling {
                     limit: mu * normal_force,
                     reference: side.velocity,
                     normal: Some(side.end_normal),
-                    patch: Some([side.obstacle, facing].map(|o| o as u32)),
+                    patch: grip.then_some([side.obstacle, facing].map(|o| o as u32)),
                 });
             }
             if solves_friction {
@@ -343,6 +344,21 @@ fn pinch_sides(
     };
     Some((share, [side(0, pair[0], pa)?, side(1, pair[1], pb)?]))
 }
+
+/// Whether the two sides carry the cloth between them together (a grip: its frictions form a
+/// patch, see [`Friction::patch`]): their tangential motion relative to each other over the
+/// substep `h` shears the cloth by less than [`GRIP_SHEAR`] of its `thickness`. Pads on one hand
+/// do; a flange sweeping cloth over a table does not, and there the cloth slides on one side or
+/// the other vertex by vertex.
+fn carried_together(a: &Side, b: &Side, h: f64, thickness: f64) -> bool {
+    let relative = a.velocity - b.velocity;
+    let n = a.end_normal;
+    let shear = (relative - n * n.dot(relative)).length() * h;
+    shear < GRIP_SHEAR * thickness
+}
+
+/// The shear of the cloth's thickness per substep below which two sides grip it together.
+const GRIP_SHEAR: f64 = 0.1;
 
 /// The faster of the two obstacles' translations over the substep (m/s).
 fn pads_speed(s: &StartState, pair: [usize; 2]) -> f64 {
