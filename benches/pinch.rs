@@ -26,6 +26,9 @@ struct Run {
     ms_per_frame: f64,
     closed_ms_per_frame: f64,
     cg_per_frame: f64,
+    /// Over the closed frames, ms per frame in the linear solves and in the collision stage.
+    closed_cg_ms: f64,
+    closed_collision_ms: f64,
 }
 
 fn load(rule: bool, self_collision: bool) -> (Simulation, RobotDriver, f64) {
@@ -65,6 +68,7 @@ fn run(rule: bool, self_collision: bool) -> Run {
     let dt = sim.settings.dt;
     let frames = (duration / dt).round() as usize;
     let (mut cg, mut closed_s, mut closed_frames) = (0u64, 0.0, 0usize);
+    let (mut closed_cg_s, mut closed_collision_s) = (0.0, 0.0);
     let start = Instant::now();
     for _ in 0..frames {
         let t = sim.time() + dt;
@@ -74,25 +78,30 @@ fn run(rule: bool, self_collision: bool) -> Run {
         if (CLOSED.0..=CLOSED.1).contains(&t) {
             closed_s += clock.elapsed().as_secs_f64();
             closed_frames += 1;
+            closed_cg_s += m.cg_time_s;
+            closed_collision_s += m.collision_time_s;
         }
         cg += u64::from(m.cg_iterations);
     }
     let wall = start.elapsed().as_secs_f64();
+    let per_closed = 1e3 / closed_frames.max(1) as f64;
     Run {
         ms_per_frame: wall * 1e3 / frames as f64,
-        closed_ms_per_frame: closed_s * 1e3 / closed_frames.max(1) as f64,
+        closed_ms_per_frame: closed_s * per_closed,
         cg_per_frame: cg as f64 / frames as f64,
+        closed_cg_ms: closed_cg_s * per_closed,
+        closed_collision_ms: closed_collision_s * per_closed,
     }
 }
 
 fn main() {
-    println!("| self-collision | rule ms/frame | pinch ms/frame | pinch / rule | closed frames: rule ms, pinch ms, pinch / rule | CG/frame (rule, pinch) |");
-    println!("|---|---|---|---|---|---|");
+    println!("| self-collision | rule ms/frame | pinch ms/frame | pinch / rule | closed frames: rule ms, pinch ms, pinch / rule | closed frames' solves ms (rule, pinch) | closed frames' collision ms (rule, pinch) | CG/frame (rule, pinch) |");
+    println!("|---|---|---|---|---|---|---|---|");
     for self_collision in [false, true] {
         let rule = run(true, self_collision);
         let pinch = run(false, self_collision);
         println!(
-            "| {} | {:.2} | {:.2} | {:.2} | {:.2}, {:.2}, {:.2} | {:.1}, {:.1} |",
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2}, {:.2}, {:.2} | {:.2}, {:.2} | {:.2}, {:.2} | {:.1}, {:.1} |",
             if self_collision { "on" } else { "off" },
             rule.ms_per_frame,
             pinch.ms_per_frame,
@@ -100,6 +109,10 @@ fn main() {
             rule.closed_ms_per_frame,
             pinch.closed_ms_per_frame,
             pinch.closed_ms_per_frame / rule.closed_ms_per_frame,
+            rule.closed_cg_ms,
+            pinch.closed_cg_ms,
+            rule.closed_collision_ms,
+            pinch.closed_collision_ms,
             rule.cg_per_frame,
             pinch.cg_per_frame,
         );
