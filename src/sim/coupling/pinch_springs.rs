@@ -15,7 +15,9 @@
 //! `N = E A f (1 - gap / (2 thickness))`. Friction is one drag per side in that side's tangent
 //! plane towards the surface's velocity, with the limit `mu N` of the start depth (see
 //! [`crate::integrate::friction`]): it sticks while the load stays under `mu (N_a + N_b)` and
-//! slides with Coulomb's force above. The vertex is not held by the filter; the collision stage,
+//! slides with Coulomb's force above; where the two sides carry the cloth together (pads on one
+//! hand), one side's drags stick or slide as one patch, on their summed load and limit (see
+//! [`Friction::patch`]). The vertex is not held by the filter; the collision stage,
 //! told which vertices the solve squeezed ([`crate::collide::SolverFeedback::squeeze`]),
 //! centres those between two faces as it centres any pinch, keeps those beside the pads' edges
 //! out of the two solids rather than out of their layers (so none ends inside either side),
