@@ -366,7 +366,9 @@ fn measure(res: usize, solver: Solver, dds: bool) -> Row {
             "{} ({} substeps, CG {}, cap {}){}",
             diag(&d, "quality_level"),
             diag(&d, "quality_substeps"),
-            diag(&d, "quality_cg_tolerance"),
+            // Three digits: the diagnostics' exact decimal reads like a hash in a report.
+            (diag(&d, "quality_cg_tolerance").parse::<f64>())
+                .map_or_else(|_| "?".to_string(), |t| format!("{t:.2e}")),
             diag(&d, "quality_cg_max_iterations"),
             match diag(&d, "real_time_factor_at_lowest_quality").as_str() {
                 "n/a" | "?" => String::new(),

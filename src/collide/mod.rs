@@ -30,6 +30,7 @@ mod respond;
 mod ring;
 mod self_contact;
 mod settings;
+mod solids;
 pub mod spec;
 mod stage;
 mod vertex_pass;
@@ -48,6 +49,7 @@ pub use report::CollisionReport;
 pub use resolve::{ContactKind, StageRollback};
 pub use self_contact::{SelfContactReport, SelfTouch};
 pub use settings::{CollisionSettings, DetectionMode, ResponseMode};
+pub use solids::Solids;
 pub use spec::{
     validate_obstacles, BuildError, CollisionSpec, MotionSpec, ObstacleSpec, PoseSpec, ShapeSpec,
     SpecError, SpecProblem,

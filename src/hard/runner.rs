@@ -3,10 +3,10 @@
 
 use super::{Case, Criteria, EnergyCheck};
 use crate::cloth::Kinematic;
+use crate::collide::Solids;
 use crate::effects::State;
 use crate::sim::Simulation;
 use crate::Vec3;
-use parry3d::shape::SharedShape;
 use std::time::Instant;
 
 /// Worst values seen over a run.
@@ -83,92 +83,17 @@ fn external_forces(sim: &Simulation, out: &mut Vec<Vec3>, scratch: &mut Vec<Vec3
     }
 }
 
-/// Inside tests of the obstacles, independent of the contact stage. A triangle mesh is a
-/// two-sided surface to the contact stage, with no inside; here a point is inside a mesh where
-/// the mesh's generalised winding number about it exceeds one half (Jacobson et al. 2013: robust
-/// to meshes that are not closed or whose faces are wound inconsistently, as shipped collision
-/// meshes often are, where parry's pseudo-normals answer "inside" half a metre away).
-struct Solids(Vec<Option<Winding>>);
-
-/// A mesh's triangles (local frame) and bounding box, for its winding number.
-struct Winding {
-    triangles: Vec<[Vec3; 3]>,
-    lo: Vec3,
-    hi: Vec3,
-}
-
-impl Winding {
-    fn of(shape: &SharedShape) -> Option<Self> {
-        let m = shape.as_trimesh()?;
-        let v: Vec<Vec3> = m.vertices().iter().map(|p| p.as_dvec3()).collect();
-        let triangles: Vec<[Vec3; 3]> = (m.indices().iter())
-            .map(|t| t.map(|i| v[i as usize]))
-            .collect();
-        let lo = v.iter().fold(Vec3::splat(f64::INFINITY), |a, p| a.min(*p));
-        let hi = v
-            .iter()
-            .fold(Vec3::splat(f64::NEG_INFINITY), |a, p| a.max(*p));
-        Some(Self { triangles, lo, hi })
-    }
-
-    /// True when local point `p` is inside (winding number above one half).
-    fn contains(&self, p: Vec3) -> bool {
-        if p.cmplt(self.lo).any() || p.cmpgt(self.hi).any() {
-            return false;
-        }
-        // Each triangle's solid angle (Van Oosterom and Strackee 1983).
-        let angle: f64 = (self.triangles.iter())
-            .map(|t| {
-                let (a, b, c) = (t[0] - p, t[1] - p, t[2] - p);
-                let (la, lb, lc) = (a.length(), b.length(), c.length());
-                let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-                2.0 * a.dot(b.cross(c)).atan2(den)
-            })
-            .sum();
-        (angle / (4.0 * std::f64::consts::PI)).abs() > 0.5
-    }
-}
-
-impl Solids {
-    fn of(sim: &Simulation) -> Self {
-        let Some(stage) = sim.collision() else {
-            return Self(Vec::new());
-        };
-        Self(
-            stage
-                .obstacles()
-                .iter()
-                .map(|o| Winding::of(&o.shape))
-                .collect(),
-        )
-    }
-
-    /// Depth of the deepest free cloth vertex inside any obstacle (m; 0 when none is), at the
-    /// obstacles' current poses.
-    fn deepest(&self, sim: &Simulation) -> f64 {
-        let Some(stage) = sim.collision() else {
-            return 0.0;
-        };
-        let mut deepest = 0.0f64;
-        for (o, winding) in stage.obstacles().iter().zip(&self.0) {
-            for (i, p) in sim.cloth.x.iter().enumerate() {
-                // A held vertex is where the scene puts it; only free vertices are judged.
-                if sim.cloth.kinematic_of(i as u32).is_some() {
-                    continue;
-                }
-                let local = o.pose.inverse_transform_point(*p);
-                let proj = o.shape.project_local_point(local.as_vec3(), false);
-                let inside = match winding {
-                    Some(w) => w.contains(local),
-                    None => proj.is_inside,
-                };
-                if inside {
-                    deepest = deepest.max(local.distance(proj.point.as_dvec3()));
-                }
-            }
-        }
-        deepest
-    }
+/// The deepest free cloth vertex inside an obstacle's solid (m; 0 when none is), at the
+/// obstacles' current poses (see [`Solids`]).
+fn deepest_free(solids: &Solids, sim: &Simulation) -> f64 {
+    let Some(stage) = sim.collision() else {
+        return 0.0;
+    };
+    (sim.cloth.x.iter().enumerate())
+        // A held vertex is where the scene puts it; only free vertices are judged.
+        .filter(|(i, _)| sim.cloth.kinematic_of(*i as u32).is_none())
+        .map(|(_, p)| solids.depth(stage, *p))
+        .fold(0.0, f64::max)
 }
 
 fn attached_drift(sim: &Simulation) -> f64 {
@@ -233,7 +158,9 @@ pub fn run_case(case: Case) -> Outcome {
     let mut energies = Vec::with_capacity(frames);
     let (mut f0, mut f1, mut scratch) = (Vec::new(), Vec::new(), Vec::new());
     let mut x0 = Vec::new();
-    let solids = criteria.max_inside_solid.map(|_| Solids::of(&sim));
+    let solids = (criteria.max_inside_solid)
+        .and(sim.collision())
+        .map(Solids::of);
     for frame in 0..frames {
         // Energy is always measured and reported; it is judged only where the case says so.
         external_forces(&sim, &mut f0, &mut scratch);
@@ -264,7 +191,7 @@ pub fn run_case(case: Case) -> Outcome {
         w.max_abs_x = c.x.iter().map(|p| p.length()).fold(w.max_abs_x, f64::max);
         w.max_stretch = w.max_stretch.max(1.0 + c.max_edge_stretch());
         if let Some(solids) = &solids {
-            let d = solids.deepest(&sim);
+            let d = deepest_free(solids, &sim);
             w.max_inside_solid = Some(w.max_inside_solid.unwrap_or(0.0).max(d));
         }
         w.max_speed = w.max_speed.max(m.max_speed);

@@ -57,6 +57,10 @@ pub struct FrameQuality {
     pub pinched_vertices: usize,
     /// The pinch's grip normal force at the last step (N; see [`StepMetrics`]).
     pub grip_normal_force: f64,
+    /// Held vertices inside an obstacle's solid at the last step, and the deepest over the
+    /// window (m; see [`StepMetrics`]).
+    pub held_inside: usize,
+    pub held_inside_depth: f64,
     /// The implicit step's linear path at the last step (`None`: an explicit method), and the
     /// Cholesky factorisations of the direct path.
     pub linear_path: Option<LinearPath>,
@@ -92,6 +96,8 @@ impl FrameQuality {
         self.strain_limit_excess = self.strain_limit_excess.max(m.strain_limit_excess);
         self.pinched_vertices = m.pinched_vertices;
         self.grip_normal_force = m.grip_normal_force;
+        self.held_inside = m.held_inside;
+        self.held_inside_depth = self.held_inside_depth.max(m.held_inside_depth);
     }
 
     /// The next window's start: no steps yet, the state values (time, contacts, vertices on
@@ -104,6 +110,7 @@ impl FrameQuality {
             exiting_vertices: self.exiting_vertices,
             pinched_vertices: self.pinched_vertices,
             grip_normal_force: self.grip_normal_force,
+            held_inside: self.held_inside,
             self_intersections: self.self_intersections,
             kinetic_energy: self.kinetic_energy,
             potential_energy: self.potential_energy,
@@ -134,7 +141,17 @@ impl FrameQuality {
     /// subdivided or cloth-cloth contacts stayed unresolved). `wall_time` adds
     /// `step_wall_time_ms`, which makes the bag differ from run to run.
     pub fn diagnostics(&self, name: &str, stamp: Time, wall_time: bool) -> DiagnosticArray {
-        let (level, message) = if self.unresolved_contacts > 0 {
+        let (level, message) = if self.held_inside > 0 {
+            (
+                DiagnosticStatus::WARN,
+                format!(
+                    "{} held cloth vertices inside an obstacle, up to {:.1} mm: the scene drives \
+                     held cloth into a solid",
+                    self.held_inside,
+                    self.held_inside_depth * 1e3
+                ),
+            )
+        } else if self.unresolved_contacts > 0 {
             (
                 DiagnosticStatus::WARN,
                 format!("{} unresolved cloth contacts", self.unresolved_contacts),
@@ -258,6 +275,13 @@ pub const METRICS: &[(&str, Value)] = &[
     }),
     ("grip_normal_force_n", |q| {
         (q.pinched_vertices > 0).then(|| q.grip_normal_force.to_string())
+    }),
+    // Only while held cloth is inside a solid.
+    ("held_inside_vertices", |q| {
+        (q.held_inside > 0).then(|| q.held_inside.to_string())
+    }),
+    ("held_inside_depth_m", |q| {
+        (q.held_inside > 0).then(|| q.held_inside_depth.to_string())
     }),
     // Only while cloth slides on cloth.
     ("slipping_vertices", |q| {

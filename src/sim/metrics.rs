@@ -71,6 +71,13 @@ pub struct StepMetrics {
     /// Vertices squeezed between two obstacle surfaces (a pinch: finger pads closed on cloth),
     /// in the last substep's solve.
     pub pinched_vertices: usize,
+    /// Kinematic vertices (pinned, attached, grasped) inside an obstacle's solid at the step's
+    /// end, and the deepest (m; an obstacle's own mesh inside by its winding number): the scene
+    /// drives held cloth into a solid (a trajectory that folds a link onto the hand holding the
+    /// cloth, fingers closing past the cloth a grasp rule holds), which no response can move,
+    /// and the free cloth around it is torn between the two.
+    pub held_inside: usize,
+    pub held_inside_depth: f64,
     /// The pinch's grip in the last substep's solve (N): over the pinched vertices, the sum of
     /// the mean normal force of their two sides (what each pad presses the cloth with; the
     /// friction holding it is at most `mu` times twice this).

@@ -98,4 +98,7 @@ pub(super) struct Work {
     /// Scratch: the positions the collision pass started from, where its answers are held to
     /// a bound (see `ResponseBound::hold_response`).
     pub pre_collision: Vec<Vec3>,
+    /// The obstacles' inside tests, for held vertices driven into a solid (a cache, built at
+    /// the first step with kinematic vertices and a collision stage).
+    pub solids: Option<crate::collide::Solids>,
 }

@@ -82,9 +82,29 @@ impl Simulation {
                 .fold(0.0, f64::max),
         };
         m.max_speed = speed2.sqrt();
+        (m.held_inside, m.held_inside_depth) = self.held_inside();
         m.wall_time_s = wall.elapsed().as_secs_f64();
         self.last = m.clone();
         Ok(m)
+    }
+
+    /// The kinematic vertices inside an obstacle's solid, and the deepest (m); nothing to test
+    /// without a collision stage or kinematic vertices.
+    fn held_inside(&mut self) -> (usize, f64) {
+        let Some(stage) = self.collision.as_ref() else {
+            return (0, 0.0);
+        };
+        if self.cloth.kinematic.is_empty() {
+            return (0, 0.0);
+        }
+        let solids = match &mut self.work.solids {
+            Some(s) if s.covers(stage) => s,
+            cache => cache.insert(crate::collide::Solids::of(stage)),
+        };
+        (self.cloth.kinematic.iter())
+            .map(|(i, _)| solids.depth(stage, self.cloth.x[*i as usize]))
+            .filter(|d| *d > 0.0)
+            .fold((0, 0.0), |(n, deepest), d| (n + 1, f64::max(deepest, d)))
     }
 
     /// One substep over `span`, redone as two halves where the guard's verdict says so.
