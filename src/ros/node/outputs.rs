@@ -38,7 +38,7 @@ pub const SLOW_RTF: f64 = 0.9;
 
 /// One `DiagnosticStatus` named `<name>: simulation`: ERROR after a divergence in the window,
 /// WARN when the cloth is tangled (self-intersecting, or pairs the fail-safe gave up on), when
-/// real time cannot be held even at the lowest allowed quality, when slower than real
+/// held cloth is inside an obstacle, when real time cannot be held even at the lowest allowed quality, when slower than real
 /// time or when inputs were dropped, else OK (saying so when quality is reduced).
 pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
     let q = d.sim;
@@ -56,6 +56,16 @@ pub fn diagnostics(d: &DiagnosticsInput) -> DiagnosticArray {
                 q.self_intersections
                     .map_or_else(|| "uncounted".into(), |n| n.to_string()),
                 q.unresolved_contacts
+            ),
+        )
+    } else if q.held_inside > 0 {
+        (
+            DiagnosticStatus::WARN,
+            format!(
+                "{} held cloth vertices inside an obstacle, up to {:.1} mm: the scene drives \
+                 held cloth into a solid",
+                q.held_inside,
+                q.held_inside_depth * 1e3
             ),
         )
     } else if d.paused {
@@ -368,6 +378,21 @@ mod tests {
             .iter()
             .any(|kv| kv.key == "grip_normal_force_n" && kv.value == "0.25"));
         sim.pinched_vertices = 0;
+        // Held cloth inside a solid: WARN with how many and how deep.
+        (sim.held_inside, sim.held_inside_depth) = (3, 0.0042);
+        let s = with(&sim);
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert!(s.message.contains("3 held cloth vertices"), "{}", s.message);
+        assert!(s.message.contains("4.2 mm"), "{}", s.message);
+        assert!(s
+            .values
+            .iter()
+            .any(|kv| kv.key == "held_inside_vertices" && kv.value == "3"));
+        (sim.held_inside, sim.held_inside_depth) = (0, 0.0);
+        assert!(!with(&sim)
+            .values
+            .iter()
+            .any(|kv| kv.key.starts_with("held_inside")));
         sim.self_intersections = Some(0);
         assert_eq!(with(&sim).level, DiagnosticStatus::OK);
         // A tangle: self-intersections, or pairs the fail-safe gave up on.
