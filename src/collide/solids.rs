@@ -68,22 +68,35 @@ impl Solids {
         self.0.len() == stage.obstacles().len()
     }
 
-    /// How deep world point `p` is inside the deepest of `stage`'s obstacles at their current
-    /// poses (m: its distance to that surface; 0 when it is inside none).
-    pub fn depth(&self, stage: &CollisionStage, p: Vec3) -> f64 {
-        let mut deepest = 0.0f64;
-        for (o, winding) in stage.obstacles().iter().zip(&self.0) {
-            let local = o.pose.inverse_transform_point(p);
-            // The cheap test first: most points are outside most obstacles' boxes.
-            let inside = match winding {
-                Some(w) => w.contains(local),
-                None => o.shape.contains_local_point(local.as_vec3()),
-            };
-            if inside {
-                let proj = o.shape.project_local_point(local.as_vec3(), false);
-                deepest = deepest.max(local.distance(proj.point.as_dvec3()));
-            }
+    /// Whether obstacle `k` is a mesh (tested by its winding number).
+    pub fn is_mesh(&self, k: usize) -> bool {
+        self.0.get(k).is_some_and(Option::is_some)
+    }
+
+    /// How deep world point `p` is inside obstacle `k` of `stage` at its current pose (m: its
+    /// distance to the surface; 0 outside).
+    pub fn depth_in(&self, stage: &CollisionStage, k: usize, p: Vec3) -> f64 {
+        let (Some(o), Some(winding)) = (stage.obstacles().get(k), self.0.get(k)) else {
+            return 0.0;
+        };
+        let local = o.pose.inverse_transform_point(p);
+        // The cheap test first: most points are outside most obstacles' boxes.
+        let inside = match winding {
+            Some(w) => w.contains(local),
+            None => o.shape.contains_local_point(local.as_vec3()),
+        };
+        if !inside {
+            return 0.0;
         }
-        deepest
+        let proj = o.shape.project_local_point(local.as_vec3(), false);
+        local.distance(proj.point.as_dvec3())
+    }
+
+    /// How deep world point `p` is inside the deepest of `stage`'s obstacles at their current
+    /// poses (m; 0 when it is inside none).
+    pub fn depth(&self, stage: &CollisionStage, p: Vec3) -> f64 {
+        (0..self.0.len())
+            .map(|k| self.depth_in(stage, k, p))
+            .fold(0.0, f64::max)
     }
 }

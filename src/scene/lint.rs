@@ -8,7 +8,10 @@
 //!   the scene on the first step;
 //! - a pin or attachment whose `near` point selects no vertex;
 //! - a grid cloth with no obstacle or robot link anywhere near it at t = 0 (only in a scene
-//!   that has obstacles): it probably sits in the wrong place.
+//!   that has obstacles): it probably sits in the wrong place;
+//! - cloth that starts inside a mesh obstacle (a mesh link, a scene `mesh`), by the mesh's
+//!   winding number: the contact stage treats a mesh as a two-sided surface, finds no inside,
+//!   and cannot lead the cloth out as it does from a solid primitive.
 
 use super::build::select;
 use super::{Scene, Selection};
@@ -55,6 +58,12 @@ pub enum WarningKind {
     /// No obstacle or robot link within `limit` m of the cloth at t = 0; the nearest is
     /// `nearest` m away.
     ClothAlone { nearest: f64, limit: f64 },
+    /// `vertices` of the cloth start inside the mesh obstacle `obstacle`, up to `deepest` m.
+    InsideMesh {
+        obstacle: String,
+        vertices: usize,
+        deepest: f64,
+    },
 }
 
 impl std::fmt::Display for Warning {
@@ -82,6 +91,17 @@ impl std::fmt::Display for Warning {
                 "selects no vertex: the nearest cloth vertex is {nearest:.3} m from `near.point` \
                  (radius {radius} m)"
             ),
+            WarningKind::InsideMesh {
+                obstacle,
+                vertices,
+                deepest,
+            } => write!(
+                f,
+                "{vertices} vertices start inside the mesh `{obstacle}` at t = 0 (up to \
+                 {deepest:.3} m, by its winding number): drape treats a mesh as a surface and \
+                 cannot lead them out; move the cloth out of it (`drape check --links` prints \
+                 the links' poses)"
+            ),
             WarningKind::ClothAlone { nearest, limit } => write!(
                 f,
                 "no obstacle or robot link within {limit:.2} m at t = 0 (the nearest is \
@@ -98,7 +118,47 @@ pub fn lint(scene: &Scene, sim: &Simulation, driver: Option<&RobotDriver>) -> Ve
     large_angles(scene, &mut out);
     held_far(scene, sim, driver, &mut out);
     alone(scene, sim, &mut out);
+    inside_meshes(scene, sim, &mut out);
     out
+}
+
+/// Per cloth and mesh obstacle, the cloth's vertices inside the mesh at t = 0 (see
+/// [`WarningKind::InsideMesh`]), keyed by the cloth (`cloths[i]`, then `garments[j]`).
+fn inside_meshes(scene: &Scene, sim: &Simulation, out: &mut Vec<Warning>) {
+    let Some(stage) = sim.collision() else { return };
+    let solids = crate::collide::Solids::of(stage);
+    let meshes: Vec<usize> = (0..stage.obstacles().len())
+        .filter(|&k| solids.is_mesh(k))
+        .collect();
+    if meshes.is_empty() {
+        return;
+    }
+    for (pi, piece) in sim.cloth.pieces.iter().enumerate() {
+        let key = match pi.checked_sub(scene.cloths.len()) {
+            None => format!("cloths[{pi}]"),
+            Some(gi) => format!("garments[{gi}]"),
+        };
+        let range = piece.first_vertex..piece.first_vertex + piece.vertex_count;
+        let Some(xs) = sim.cloth.x.get(range) else {
+            continue;
+        };
+        for &k in &meshes {
+            let (vertices, deepest) = (xs.iter())
+                .map(|&p| solids.depth_in(stage, k, p))
+                .filter(|d| *d > 0.0)
+                .fold((0, 0.0), |(n, deepest), d| (n + 1, f64::max(deepest, d)));
+            if vertices > 0 {
+                out.push(Warning {
+                    key: key.clone(),
+                    kind: WarningKind::InsideMesh {
+                        obstacle: stage.obstacles()[k].name.clone(),
+                        vertices,
+                        deepest,
+                    },
+                });
+            }
+        }
+    }
 }
 
 /// Every `rpy` entry, and every number under a key naming an angle, over 2π in magnitude. The
