@@ -9,8 +9,11 @@
 //! `cargo bench --bench pinch` prints one row per variant: wall time per frame over the run and
 //! over the closed frames, CG iterations per frame, and the pinch's time over the rule's.
 
+#[path = "../tests/common/finger_rule.rs"]
+mod finger_rule;
+
 use drape::robot::RobotDriver;
-use drape::scene::{PadSpec, RobotGraspSpec, Scene};
+use drape::scene::Scene;
 use drape::sim::Simulation;
 use std::path::Path;
 use std::time::Instant;
@@ -44,19 +47,7 @@ fn load(rule: bool, self_collision: bool) -> (Simulation, RobotDriver, f64) {
         for p in &mut trajectory.points {
             p.positions[finger] = p.positions[finger].max(RULE_CLOSED);
         }
-        robot.grasps.push(RobotGraspSpec {
-            link: "right_palm".into(),
-            fingers: vec!["right_finger_a_joint".into()],
-            close_below: 0.012,
-            open_above: 0.02,
-            // Between the fingers (palm frame: they span z -0.06 to -0.12, x +-0.01).
-            pads: PadSpec {
-                xyz: [0.0, 0.0, -0.09],
-                rpy: [0.0; 3],
-                half_extents: [0.01, 0.012, 0.03],
-            },
-            cloth: None,
-        });
+        robot.grasps.push(finger_rule::between_the_fingers());
     }
     let duration = s.duration;
     let (sim, driver) = s.build_with_robot().expect("valid scene");

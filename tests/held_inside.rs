@@ -2,7 +2,10 @@
 //! attached, grasped) inside an obstacle at a step's end are counted in `StepMetrics` with
 //! their depth (no response can move them), and the frame's `/diagnostics` status warns.
 
-use drape::scene::{PadSpec, RobotGraspSpec, Scene};
+#[path = "common/finger_rule.rs"]
+mod finger_rule;
+
+use drape::scene::Scene;
 use std::path::Path;
 
 /// A 0.2 m sheet hanging from its two top corners, with a 0.1 m box whose top face is at
@@ -55,18 +58,7 @@ fn fingers_closing_past_the_cloth_a_rule_holds_are_reported() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/robot_pinch_towel.yaml");
     let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let robot = scene.robot.as_mut().expect("a robot");
-    robot.grasps.push(RobotGraspSpec {
-        link: "right_palm".into(),
-        fingers: vec!["right_finger_a_joint".into()],
-        close_below: 0.012,
-        open_above: 0.02,
-        pads: PadSpec {
-            xyz: [0.0, 0.0, -0.09],
-            rpy: [0.0; 3],
-            half_extents: [0.01, 0.012, 0.03],
-        },
-        cloth: None,
-    });
+    robot.grasps.push(finger_rule::between_the_fingers());
     let (mut sim, driver) = scene.build_with_robot().unwrap_or_else(|e| panic!("{e}"));
     let mut driver = driver.expect("a robot");
     let dt = sim.settings.dt;

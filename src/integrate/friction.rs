@@ -283,20 +283,12 @@ impl Drag {
 /// the patch's mass would (see [`Drag::fit`]), at its mass-weighted mean slip; sticking, each
 /// member keeps its firm drag. `v` and `mass` are per vertex, `h` the step.
 pub(crate) fn fit_patches(drags: &mut [Drag], v: &[Vec3], mass: &[f64], h: f64) {
+    let at = |i: usize| v.get(i).copied().unwrap_or(Vec3::ZERO);
     for (_, members) in patches(drags) {
-        let (mut m, mut limit, mut load, mut slip) = (0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
-        for &k in &members {
-            let g = &drags[k];
-            let mi = mass.get(g.vertex).copied().unwrap_or(0.0);
-            m += mi;
-            limit += g.limit;
-            load += g.load;
-            slip += g.slip(v.get(g.vertex).copied().unwrap_or(Vec3::ZERO)) * mi;
-        }
-        if !(m > 0.0 && limit > 0.0) {
+        let Some(p) = Patch::of(drags, &members, at, mass) else {
             continue;
-        }
-        let slip = slip / m;
+        };
+        let (m, limit, load, slip) = (p.mass, p.limit, p.load, p.slip);
         let speed = slip.length();
         let slides = speed > STICK_SPEED && speed + h / m * (load.dot(slip / speed) - limit) > 0.0;
         for &k in &members {
@@ -330,26 +322,57 @@ pub(crate) fn overloaded(
         return out;
     }
     for (_, members) in patches(drags) {
-        let (mut m, mut limit, mut drag, mut slip) = (0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
-        let mut sticking = true;
-        for &k in &members {
-            let g = &drags[k];
-            let (vi, mi) = (at(g.vertex), mass.get(g.vertex).copied().unwrap_or(0.0));
-            sticking &= matches!(g.mode, Mode::Sticking { .. });
-            m += mi;
-            limit += g.limit;
-            drag += g.force(vi);
-            slip += g.slip(vi) * mi;
-        }
-        if !sticking || m <= 0.0 || drag.length() <= OVERSHOOT * limit {
+        let sticking = (members.iter()).all(|&k| matches!(drags[k].mode, Mode::Sticking { .. }));
+        let Some(p) = Patch::of(drags, &members, &at, mass).filter(|_| sticking) else {
             continue;
-        }
-        let slip = slip / m;
-        if slip.length() > 0.0 {
-            out.extend(members.iter().map(|&k| (k, drags[k].sliding_at(slip))));
+        };
+        if p.drag.length() > OVERSHOOT * p.limit && p.slip.length() > 0.0 {
+            out.extend(members.iter().map(|&k| (k, drags[k].sliding_at(p.slip))));
         }
     }
     out
+}
+
+/// A pinch patch's sums at its members' velocities: mass (kg), Coulomb limit and fitted load
+/// (N), drag (N) and mass-weighted mean slip (m/s).
+struct Patch {
+    mass: f64,
+    limit: f64,
+    load: Vec3,
+    drag: Vec3,
+    slip: Vec3,
+}
+
+impl Patch {
+    /// The sums over `members` (indices into `drags`) at the velocities `at` a vertex; `None`
+    /// for a patch without mass or limit.
+    fn of(
+        drags: &[Drag],
+        members: &[usize],
+        at: impl Fn(usize) -> Vec3,
+        mass: &[f64],
+    ) -> Option<Self> {
+        let mut p = Self {
+            mass: 0.0,
+            limit: 0.0,
+            load: Vec3::ZERO,
+            drag: Vec3::ZERO,
+            slip: Vec3::ZERO,
+        };
+        for &k in members {
+            let g = &drags[k];
+            let (vi, mi) = (at(g.vertex), mass.get(g.vertex).copied().unwrap_or(0.0));
+            p.mass += mi;
+            p.limit += g.limit;
+            p.load += g.load;
+            p.drag += g.force(vi);
+            p.slip += g.slip(vi) * mi;
+        }
+        (p.mass > 0.0 && p.limit > 0.0).then(|| Self {
+            slip: p.slip / p.mass,
+            ..p
+        })
+    }
 }
 
 /// The pinch patches among `drags`: each patch's key and its members' indices.
