@@ -102,26 +102,38 @@ collision: {{ mode: continuous }}
     )
 }
 
-/// The tarp on the turning box: with a knee at 3 %, every frame end within 1.05.
+/// The tarp on the turning box, over its whole run: the worst frame's edge.
+fn tarp_worst(knee: Option<f64>) -> (f64, usize) {
+    let scene = Scene::from_yaml(&tarp(knee), "tarp").unwrap_or_else(|e| panic!("{e}"));
+    let frames = (scene.duration / scene.solver.dt).round() as usize;
+    let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
+    worst_over(&mut sim, frames)
+}
+
+/// The tarp on the turning box: with a knee at 3 %, every frame end within 1.05 (the box edge's
+/// feature answers spread over the tarp around them, `sim/limit.rs`).
 #[test]
-#[ignore = "known limit: the box edge's answers in the collision pass (feature contacts, not \
-            held to the bound) stretch the tarp to 1.17 at the corner, over 1.05"]
 fn a_stiff_tarp_on_a_turning_box_stays_near_its_knee() {
-    let run = |knee| {
-        let scene = Scene::from_yaml(&tarp(knee), "tarp").unwrap_or_else(|e| panic!("{e}"));
-        let frames = (scene.duration / scene.solver.dt).round() as usize;
-        let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
-        worst_over(&mut sim, frames)
-    };
-    let linear = run(None);
-    let knee = run(Some(0.03));
-    eprintln!("tarp: linear {linear:?}, knee 3 % {knee:?}");
+    let knee = tarp_worst(Some(0.03));
+    eprintln!(
+        "tarp, knee 3 %: worst edge {:.4} at frame {}",
+        knee.0, knee.1
+    );
     assert!(
         knee.0 <= 1.05,
         "worst edge {:.4} at frame {}",
         knee.0,
         knee.1
     );
+}
+
+/// The linear tarp's worst edge, for comparison (printed, not judged: the collision pass's
+/// answers on a linear material are not held to a bound, see `sim/limit.rs`).
+#[test]
+#[ignore = "measurement: cargo test --release --test stretch_knee linear_tarp -- --ignored --nocapture"]
+fn linear_tarp_on_a_turning_box() {
+    let (w, at) = tarp_worst(None);
+    eprintln!("tarp, linear: worst edge {w:.4} at frame {at}");
 }
 
 /// Every bundled scene with self-collision on and a knee at 3 % on every material: no

@@ -28,6 +28,23 @@ impl CollisionStage {
         h: f64,
         feedback: &SolverFeedback,
     ) -> CollisionReport {
+        self.resolve_with(x0, x1, v1, inv_mass, h, feedback, |_, _| {})
+    }
+
+    /// [`Self::resolve`], with `between` run on the positions after the obstacles' passes and
+    /// before cloth-cloth contact, which then sees what it moved (the simulation holds the
+    /// obstacles' answers to a stretch bound there, `sim::limit::ResponseBound`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn resolve_with(
+        &mut self,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v1: &mut [Vec3],
+        inv_mass: &[f64],
+        h: f64,
+        feedback: &SolverFeedback,
+        between: impl FnOnce(&CollisionStage, &mut [Vec3]),
+    ) -> CollisionReport {
         let start = Instant::now();
         let n = self
             .n_vertices
@@ -114,6 +131,7 @@ impl CollisionStage {
             separate_wedged(obs, th, &by_vertex, x0, x1, v1, n, &pinched);
         }
         self.feature_moved = moved;
+        between(self, &mut x1[..n]);
         if let Some(mut sc) = self.self_collider.take() {
             self.resolve_self(&mut sc, &mut report, x0, x1, v1, inv_mass, h, n, feedback);
             if self.settings.count_self_intersections {

@@ -157,6 +157,11 @@ impl CollisionStage {
         &self.settings
     }
 
+    /// Vertex `i`'s contact thickness (m; 0 past the cloth).
+    pub fn thickness_of(&self, i: usize) -> f64 {
+        self.thickness.get(i).copied().unwrap_or(0.0)
+    }
+
     pub fn obstacles(&self) -> &[Obstacle] {
         &self.obstacles
     }

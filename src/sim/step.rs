@@ -43,6 +43,10 @@ use super::span::Span;
 use crate::integrate::Dynamics;
 use std::time::Instant;
 
+/// The longest move of one spreading pass, over the vertex's contact thickness: an edge whose
+/// end moves less than a rod's diameter cannot jump the rod between two checks of its end state.
+const SPREAD_MOVE: f64 = 0.25;
+
 impl Simulation {
     /// Switches fast-contact splitting and the guard's checks after the collision pass off or
     /// back on (on by default): what they cost is measured against this
@@ -366,20 +370,30 @@ impl Simulation {
             self.work.pre_collision.clone_from(x);
         }
         let feedback = &self.coupling.feedback;
-        let r = stage.resolve(&self.work.x_start, x, v, inv_mass, span.h, feedback);
-        m.add_collision(&r);
-        if let Some(bound) = bound {
-            // An obstacle's answer past the bound goes to the next solve (see `super::limit`).
-            let stage = &*stage;
-            // Only the vertex pass's answers: a feature answer keeps an obstacle's edge or rod
-            // from passing between vertices, which no vertex's own way back would see.
-            let kind = |i: usize| stage.contact_kind(i, false);
-            let by_obstacle =
-                |i: usize| kind(i) == Some(crate::collide::ContactKind::ObstacleVertex);
+        let before = &self.work.pre_collision;
+        let inv_mass = &*inv_mass;
+        // Between the obstacles' passes and cloth-cloth contact, which then sees every move: an
+        // obstacle's answer past the bound goes to the next solve, or where it cannot, is spread
+        // over the cloth around it (see `super::limit`).
+        let hold = |stage: &crate::collide::CollisionStage, x: &mut [crate::Vec3]| {
+            let Some(bound) = bound else {
+                return;
+            };
+            // Only the vertex pass's answers go back: a feature answer keeps an obstacle's edge
+            // or rod from passing between vertices, which no vertex's own way back would see.
+            let by_obstacle = |i: usize| {
+                stage.contact_kind(i, false) == Some(crate::collide::ContactKind::ObstacleVertex)
+            };
             let clear = |a, b| super::limit::clear_of_obstacles(stage, a, b);
-            let before = &self.work.pre_collision;
             bound.hold_response(before, x, by_obstacle, clear);
-        }
+            let clear = |k, a, b| super::limit::clear_of_layers(stage, k, a, b);
+            let edge_clear = |a, b| super::limit::clear_of_obstacles(stage, a, b);
+            let max_move = |k| SPREAD_MOVE * stage.thickness_of(k);
+            bound.spread_response(before, x, inv_mass, clear, edge_clear, max_move);
+        };
+        let x0 = &self.work.x_start;
+        let r = stage.resolve_with(x0, x, v, inv_mass, span.h, feedback, hold);
+        m.add_collision(&r);
         let after = Energies::of(&self.cloth, &self.model.effects);
         self.guard.collided(after, r.unresolved);
     }
