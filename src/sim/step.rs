@@ -43,10 +43,6 @@ use super::span::Span;
 use crate::integrate::Dynamics;
 use std::time::Instant;
 
-/// The longest move of one spreading pass, over the vertex's contact thickness: an edge whose
-/// end moves less than a rod's diameter cannot jump the rod between two checks of its end state.
-const SPREAD_MOVE: f64 = 0.25;
-
 impl Simulation {
     /// Switches fast-contact splitting and the guard's checks after the collision pass off or
     /// back on (on by default): what they cost is measured against this
@@ -388,8 +384,8 @@ impl Simulation {
             bound.hold_response(before, x, by_obstacle, clear);
             let clear = |k, a, b| super::limit::clear_of_layers(stage, k, a, b);
             let edge_clear = |a, b| super::limit::clear_of_obstacles(stage, a, b);
-            let max_move = |k| SPREAD_MOVE * stage.thickness_of(k);
-            bound.spread_response(before, x, inv_mass, clear, edge_clear, max_move);
+            let thickness = |k| stage.thickness_of(k);
+            bound.spread_response(before, x, inv_mass, clear, edge_clear, thickness);
         };
         let x0 = &self.work.x_start;
         let r = stage.resolve_with(x0, x, v, inv_mass, span.h, feedback, hold);
