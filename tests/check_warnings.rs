@@ -203,3 +203,88 @@ obstacles:
         assert_eq!(warned, inside, "sheet at z = {z}:\n{out}");
     }
 }
+
+/// A one-joint arm that swings the corner it holds through a post of its own robot (the held
+/// point 0.5 m out on the arm, the post 0.5 m along y from the joint): `drape check` names the
+/// attachment, the post and when, as a user would be told that their trajectory drags held
+/// cloth through the robot; swung only half as far, the held corner stays clear and nothing is
+/// said.
+#[test]
+fn held_cloth_swung_through_another_link_of_the_robot_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("arm.urdf"),
+        r#"<robot name="arm">
+  <link name="base">
+    <collision><origin xyz="0 0.5 0"/><geometry><box size="0.1 0.1 0.4"/></geometry></collision>
+  </link>
+  <link name="arm">
+    <collision><origin xyz="0.2 0 0"/><geometry><box size="0.4 0.02 0.02"/></geometry></collision>
+  </link>
+  <joint name="swing" type="revolute">
+    <parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-3.14" upper="3.14" effort="10" velocity="2.0"/>
+  </joint>
+</robot>
+"#,
+    )
+    .unwrap();
+    for (angle, through) in [
+        (std::f64::consts::FRAC_PI_2, true),
+        (std::f64::consts::FRAC_PI_4, false),
+    ] {
+        let path = dir.path().join("swing.yaml");
+        std::fs::write(
+            &path,
+            format!(
+                r#"
+name: swing
+duration: 1.5
+effects: [gravity, stretch]
+solver: {{ integrator: implicit, dt: 0.01 }}
+cloths:
+  - name: towel
+    grid: {{ size: [0.1, 0.1], resolution: [6, 6], pose: {{ xyz: [0.55, 0.0, -0.05], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
+robot:
+  urdf: arm.urdf
+  trajectory:
+    names: [swing]
+    points:
+      - {{ t: 0.0, positions: [0.0] }}
+      - {{ t: 1.0, positions: [{angle}] }}
+  attach:
+    - {{ cloth: towel, link: arm, near: {{ point: [0.5, 0.0, 0.0], radius: 0.015 }} }}
+"#
+            ),
+        )
+        .unwrap();
+        let o = drape(&["check"], &path);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{out}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let held: Vec<&str> = out
+            .lines()
+            .filter(|l| l.starts_with("warning:") && l.contains("robot.attach[0]"))
+            .collect();
+        if through {
+            assert_eq!(held.len(), 1, "{out}");
+            assert!(held[0].contains("inside its link `base`"), "{out}");
+            // The held corner enters the 10 cm post where the arm has turned by
+            // atan(0.05 / 0.5) short of a quarter turn, and is deepest at the end, 5 cm in.
+            let first: f64 = held[0]
+                .split("from t = ")
+                .nth(1)
+                .and_then(|r| r.split(' ').next())
+                .and_then(|t| t.parse().ok())
+                .unwrap();
+            let enters = 1.0 - (0.05f64 / 0.5).atan() / std::f64::consts::FRAC_PI_2;
+            assert!((first - enters).abs() < 0.02, "{first} vs {enters}\n{out}");
+            assert!(held[0].contains("0.05"), "{out}");
+        } else {
+            assert!(held.is_empty(), "{out}");
+        }
+    }
+}

@@ -18,15 +18,6 @@ fn run(name: &str, res: Resolution) -> Outcome {
 /// that passes again has to leave this list), so the gap stays visible instead of ignored.
 const KNOWN_FAILING: &[(&str, &str)] = &[
     (
-        "real_panda_towel_whip",
-        "3.28x: the scripted waypoints drive the held corner 4 cm into link1 (t = 0.65-0.75 s); \
-         its free neighbours, kept outside the link, stretch to follow it",
-    ),
-    (
-        "real_panda_self_towel_whip",
-        "3.28x: the same held corner driven into link1",
-    ),
-    (
         "real_kuka_towel_whip",
         "1.30x over the 1.22 impact bound with no contact: the towel swung round the held \
          corner pulls on the few springs there, which linear springs do not limit; it grows \

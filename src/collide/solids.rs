@@ -6,7 +6,7 @@
 //! pseudo-normals answer "inside" half a metre away). Primitives answer by parry's projection.
 
 use super::CollisionStage;
-use crate::Vec3;
+use crate::{Pose, Vec3};
 use parry3d::shape::SharedShape;
 
 /// Per obstacle of a stage, its mesh's winding test (`None`: a primitive, tested by parry).
@@ -76,10 +76,20 @@ impl Solids {
     /// How deep world point `p` is inside obstacle `k` of `stage` at its current pose (m: its
     /// distance to the surface; 0 outside).
     pub fn depth_in(&self, stage: &CollisionStage, k: usize, p: Vec3) -> f64 {
+        match stage.obstacles().get(k) {
+            Some(o) => self.depth_at(stage, k, &o.pose, p),
+            None => 0.0,
+        }
+    }
+
+    /// How deep world point `p` is inside obstacle `k` of `stage` were the obstacle at `pose`
+    /// (m; 0 outside): the inside test of a pose the obstacle takes later, e.g. a robot link's
+    /// along its trajectory.
+    pub fn depth_at(&self, stage: &CollisionStage, k: usize, pose: &Pose, p: Vec3) -> f64 {
         let (Some(o), Some(winding)) = (stage.obstacles().get(k), self.0.get(k)) else {
             return 0.0;
         };
-        let local = o.pose.inverse_transform_point(p);
+        let local = pose.inverse_transform_point(p);
         // The cheap test first: most points are outside most obstacles' boxes.
         let inside = match winding {
             Some(w) => w.contains(local),

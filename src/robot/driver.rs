@@ -160,6 +160,11 @@ impl RobotDriver {
         self.bindings[link].frame = Some(frame);
     }
 
+    /// The collision-stage obstacles of `link`: each one's index and its pose in the link frame.
+    pub fn obstacles_of(&self, link: usize) -> &[(usize, Pose)] {
+        self.bindings.get(link).map_or(&[], |b| &b.obstacles)
+    }
+
     /// The frame bound to `link`, if any.
     pub fn frame_of(&self, link: usize) -> Option<usize> {
         self.bindings.get(link).and_then(|b| b.frame)

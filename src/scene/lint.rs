@@ -11,7 +11,12 @@
 //!   that has obstacles): it probably sits in the wrong place;
 //! - cloth that starts inside a mesh obstacle (a mesh link, a scene `mesh`), by the mesh's
 //!   winding number: the contact stage treats a mesh as a two-sided surface, finds no inside,
-//!   and cannot lead the cloth out as it does from a solid primitive.
+//!   and cannot lead the cloth out as it does from a solid primitive;
+//! - cloth attached to a robot link that the robot's motion carries inside another of its links
+//!   (a wrist folded onto the shoulder, a hand swept through the base): held vertices go where
+//!   the link takes them whatever is there, so the cloth around them is pulled out of the other
+//!   link and stretched. drape does not check a robot against itself; this check does, for what
+//!   the robot holds, by sampling the scene's trajectory.
 
 use super::build::select;
 use super::{Scene, Selection};
@@ -33,6 +38,11 @@ pub const ALONE_DISTANCE: f64 = 1.0;
 
 /// See [`ALONE_DISTANCE`]: a large cloth may hang well above what it lands on.
 pub const ALONE_CLOTH_SIZES: f64 = 2.0;
+
+/// Time between the trajectory samples at which held cloth is checked against the robot's
+/// other links (s): at the 2-3 m/s of an arm at its joint-velocity limits a held point moves
+/// about a centimetre between samples, less than a link is thick.
+pub const HELD_SAMPLE: f64 = 1.0 / 200.0;
 
 /// One likely mistake, with the scene key it is about (`cloths[0].grid.pose.rpy[0]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -58,6 +68,15 @@ pub enum WarningKind {
     /// No obstacle or robot link within `limit` m of the cloth at t = 0; the nearest is
     /// `nearest` m away.
     ClothAlone { nearest: f64, limit: f64 },
+    /// The robot's motion carries vertices attached to `holder` up to `deepest` m inside its
+    /// link `link` (deeper than the cloth is thick): first at `first` s, deepest at `at` s.
+    HeldThroughLink {
+        holder: String,
+        link: String,
+        first: f64,
+        at: f64,
+        deepest: f64,
+    },
     /// `vertices` of the cloth start inside the mesh obstacle `obstacle`, up to `deepest` m.
     InsideMesh {
         obstacle: String,
@@ -102,6 +121,20 @@ impl std::fmt::Display for Warning {
                  cannot lead them out; move the cloth out of it (`drape check --links` prints \
                  the links' poses)"
             ),
+            WarningKind::HeldThroughLink {
+                holder,
+                link,
+                first,
+                at,
+                deepest,
+            } => write!(
+                f,
+                "the robot's trajectory carries the cloth held by `{holder}` {deepest:.3} m inside \
+                 its link `{link}` (from t = {first:.2} s, deepest at t = {at:.2} s): held \
+                 vertices follow their link whatever is there, so the cloth around them is \
+                 pulled out of `{link}` and stretched; keep what the robot holds clear of its \
+                 other links (drape does not check a robot against itself)"
+            ),
             WarningKind::ClothAlone { nearest, limit } => write!(
                 f,
                 "no obstacle or robot link within {limit:.2} m at t = 0 (the nearest is \
@@ -119,7 +152,87 @@ pub fn lint(scene: &Scene, sim: &Simulation, driver: Option<&RobotDriver>) -> Ve
     held_far(scene, sim, driver, &mut out);
     alone(scene, sim, &mut out);
     inside_meshes(scene, sim, &mut out);
+    held_through_links(scene, sim, driver, &mut out);
     out
+}
+
+/// Robot attachments that the scene's trajectory carries inside another link of the robot (see
+/// [`WarningKind::HeldThroughLink`]), sampled every [`HELD_SAMPLE`] over the scene's duration.
+/// Links that already hold an attached vertex inside them at t = 0 (the gripper's own fingers)
+/// are not judged.
+fn held_through_links(
+    scene: &Scene,
+    sim: &Simulation,
+    driver: Option<&RobotDriver>,
+    out: &mut Vec<Warning>,
+) {
+    let (Some(r), Some(driver), Some(stage)) = (&scene.robot, driver, sim.collision()) else {
+        return;
+    };
+    let robot = driver.robot();
+    let solids = crate::collide::Solids::of(stage);
+    let samples = (scene.duration / HELD_SAMPLE).ceil().clamp(1.0, 1e6) as usize;
+    let poses: Vec<Vec<crate::Pose>> = (0..=samples)
+        .map(|s| robot.link_poses(&driver.positions_at(s as f64 * HELD_SAMPLE)))
+        .collect();
+    let depth = |link: usize, at: &[crate::Pose], p: Vec3| {
+        (driver.obstacles_of(link).iter())
+            .map(|(k, local)| solids.depth_at(stage, *k, &at[link].mul(local), p))
+            .fold(0.0, f64::max)
+    };
+    for (k, a) in r.attach.iter().enumerate() {
+        let (Some(ci), Some(holder)) = (
+            scene.cloths.iter().position(|c| c.name == a.cloth),
+            robot.link_index(&a.link),
+        ) else {
+            continue;
+        };
+        let (Some(piece), Some(start)) = (sim.cloth.pieces.get(ci), poses.first()) else {
+            continue;
+        };
+        let mut sel = a.selection();
+        if let Some(near) = sel.near.as_mut() {
+            near.point = start[holder].transform_point(Vec3::from(near.point)).into();
+        }
+        let local: Vec<Vec3> = (select(piece, &sel).iter())
+            .filter_map(|&v| sim.cloth.x.get(v as usize))
+            .map(|&p| start[holder].inverse_transform_point(p))
+            .collect();
+        let thickness = scene.cloths[ci].material.thickness;
+        for link in (0..poses[0].len()).filter(|&l| l != holder) {
+            let held_at = |at: &Vec<crate::Pose>| {
+                (local.iter())
+                    .map(|&p| depth(link, at, at[holder].transform_point(p)))
+                    .fold(0.0, f64::max)
+            };
+            if held_at(start) > 0.0 {
+                continue;
+            }
+            let (mut first, mut deepest) = (None, (0.0, 0.0));
+            for (s, at) in poses.iter().enumerate() {
+                let d = held_at(at);
+                if d > thickness {
+                    let t = s as f64 * HELD_SAMPLE;
+                    first.get_or_insert(t);
+                    if d > deepest.0 {
+                        deepest = (d, t);
+                    }
+                }
+            }
+            if let Some(first) = first {
+                out.push(Warning {
+                    key: format!("robot.attach[{k}]"),
+                    kind: WarningKind::HeldThroughLink {
+                        holder: a.link.clone(),
+                        link: robot.link_names()[link].clone(),
+                        first,
+                        at: deepest.1,
+                        deepest: deepest.0,
+                    },
+                });
+            }
+        }
+    }
 }
 
 /// Per cloth and mesh obstacle, the cloth's vertices inside the mesh at t = 0 (see
