@@ -9,7 +9,7 @@ use super::features::{ClothState, FeatureContact};
 use super::feedback::SolverFeedback;
 use super::pinch::{center_pinched, contacts_by_vertex, pinched_by};
 use super::report::CollisionReport;
-use super::self_contact::{SelfCollider, SelfOutcome, SelfTouch};
+use super::self_contact::{Repelled, SelfCollider, SelfOutcome, SelfTouch};
 use super::stage::CollisionStage;
 use super::wedge::separate_wedged;
 use crate::{Pose, Vec3};
@@ -28,12 +28,13 @@ impl CollisionStage {
         h: f64,
         feedback: &SolverFeedback,
     ) -> CollisionReport {
-        self.resolve_with(x0, x1, v1, inv_mass, h, feedback, |_, _| {})
+        self.resolve_with(x0, x1, v1, inv_mass, h, feedback, |_, _| {}, &mut |_, _| {})
     }
 
     /// [`Self::resolve`], with `between` run on the positions after the obstacles' passes and
-    /// before cloth-cloth contact, which then sees what it moved (the simulation holds the
-    /// obstacles' answers to a stretch bound there, `sim::limit::ResponseBound`).
+    /// before cloth-cloth contact, which then sees what it moved, and `repelled` on cloth-cloth
+    /// repulsion's answers before its CCD passes (the simulation holds both to a stretch bound
+    /// there, `sim::limit::ResponseBound`).
     #[allow(clippy::too_many_arguments)]
     pub fn resolve_with(
         &mut self,
@@ -44,6 +45,7 @@ impl CollisionStage {
         h: f64,
         feedback: &SolverFeedback,
         between: impl FnOnce(&CollisionStage, &mut [Vec3]),
+        repelled: Repelled,
     ) -> CollisionReport {
         let start = Instant::now();
         let n = self
@@ -133,7 +135,16 @@ impl CollisionStage {
         self.feature_moved = moved;
         between(self, &mut x1[..n]);
         if let Some(mut sc) = self.self_collider.take() {
-            self.resolve_self(&mut sc, &mut report, x0, x1, v1, inv_mass, h, n, feedback);
+            self.resolve_self(
+                &mut sc,
+                &mut report,
+                (x0, x1, v1),
+                inv_mass,
+                h,
+                n,
+                feedback,
+                repelled,
+            );
             if self.settings.count_self_intersections {
                 report.self_intersections = Some(sc.count_intersections(x1));
             }
@@ -188,13 +199,12 @@ impl CollisionStage {
         &mut self,
         sc: &mut SelfCollider,
         report: &mut CollisionReport,
-        x0: &[Vec3],
-        x1: &mut [Vec3],
-        v1: &mut [Vec3],
+        (x0, x1, v1): (&[Vec3], &mut [Vec3], &mut [Vec3]),
         inv_mass: &[f64],
         h: f64,
         n: usize,
         feedback: &SolverFeedback,
+        repelled: Repelled,
     ) {
         let mut before = std::mem::take(&mut self.before_self);
         before.clear();
@@ -202,7 +212,7 @@ impl CollisionStage {
         let mut mark = std::mem::take(&mut self.round_start);
         mark.clone_from(&before);
         let mut moved = std::mem::take(&mut self.self_moved);
-        let mut out = self.self_pass(sc, x0, x1, v1, inv_mass, h, true);
+        let mut out = self.self_pass(sc, x0, x1, v1, inv_mass, h, Some(repelled));
         for _ in 1..SELF_OBSTACLE_ROUNDS {
             moved.clear();
             let exits = &self.exits;
@@ -230,7 +240,7 @@ impl CollisionStage {
             if !pushed {
                 break;
             }
-            let again = self.self_pass(sc, x0, x1, v1, inv_mass, h, false);
+            let again = self.self_pass(sc, x0, x1, v1, inv_mass, h, None);
             out.report.add(&again.report);
             out.report.obstacle_retests += 1;
             out.unresolved = again.unresolved;
@@ -256,7 +266,8 @@ impl CollisionStage {
 }
 
 impl CollisionStage {
-    /// One cloth-cloth pass over the stage's per-vertex data (`first`: with its repulsion).
+    /// One cloth-cloth pass over the stage's per-vertex data: the step's first, with its
+    /// repulsion and the hook on its answers (`repelled`), or a later one.
     #[allow(clippy::too_many_arguments)]
     fn self_pass(
         &self,
@@ -266,8 +277,10 @@ impl CollisionStage {
         v1: &mut [Vec3],
         inv_mass: &[f64],
         h: f64,
-        first: bool,
+        repelled: Option<Repelled>,
     ) -> SelfOutcome {
+        let first = repelled.is_some();
+        let mut none = |_: &[Vec3], _: &mut [Vec3]| {};
         sc.resolve(
             &self.settings,
             x0,
@@ -279,6 +292,7 @@ impl CollisionStage {
             &self.in_contact,
             h,
             first,
+            repelled.unwrap_or(&mut none),
         )
     }
 

@@ -387,8 +387,16 @@ impl Simulation {
             let thickness = |k| stage.thickness_of(k);
             bound.spread_response(before, x, inv_mass, clear, edge_clear, thickness);
         };
+        // Cloth-cloth repulsion's answers likewise go back to the next solve, whose layer
+        // springs hold the layers apart, where they stretch an edge past the bound; the CCD
+        // passes and impact zones after it keep the layers from crossing.
+        let mut repelled = |before: &[crate::Vec3], x: &mut [crate::Vec3]| {
+            if let Some(bound) = bound {
+                bound.hold_response(before, x, |_| true, |_, _| true);
+            }
+        };
         let x0 = &self.work.x_start;
-        let r = stage.resolve_with(x0, x, v, inv_mass, span.h, feedback, hold);
+        let r = stage.resolve_with(x0, x, v, inv_mass, span.h, feedback, hold, &mut repelled);
         m.add_collision(&r);
         let after = Energies::of(&self.cloth, &self.model.effects);
         self.guard.collided(after, r.unresolved);

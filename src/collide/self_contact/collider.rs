@@ -53,6 +53,9 @@ pub(crate) struct SelfCollider {
     /// Inverse masses without the obstacle-contact weighting of `w`: friction's impulses are
     /// distributed by these, equal and opposite on the two layers.
     pub(super) w_true: Vec<f64>,
+    /// The positions the repulsion passes started from, for the caller's hold on what they
+    /// stretched (see [`SelfCollider::resolve`]).
+    pub(super) before_repulsion: Vec<Vec3>,
     pub(super) parent: Vec<u32>,
     pub(super) zone_members: Vec<Vec<u32>>,
     pub(super) in_zone: Vec<bool>,
@@ -128,6 +131,7 @@ impl SelfCollider {
             vertex_faces: vertex_faces(triangles, n_vertices),
             w: Vec::new(),
             w_true: Vec::new(),
+            before_repulsion: Vec::new(),
             parent: Vec::new(),
             zone_members: Vec::new(),
             in_zone: Vec::new(),

@@ -41,6 +41,6 @@ mod zones;
 
 pub(crate) use collider::SelfCollider;
 pub use report::SelfContactReport;
-pub(crate) use resolve::SelfOutcome;
+pub(crate) use resolve::{Repelled, SelfOutcome};
 pub(crate) use touch::refresh as refresh_touches;
 pub use touch::SelfTouch;

@@ -25,7 +25,16 @@ pub(crate) struct SelfOutcome {
     pub report: SelfContactReport,
 }
 
+/// What the caller does with the repulsion's answers before the CCD passes: `repelled(before,
+/// x)`, with `before` the positions the repulsion started from (the simulation holds them to
+/// a stretch bound there, `sim::limit::ResponseBound`). Repulsion keeps layers a contact
+/// distance apart, which the next solve's layer springs also do; CCD and the impact zones after
+/// it keep them from crossing whatever the hook took back.
+pub(crate) type Repelled<'a> = &'a mut dyn FnMut(&[Vec3], &mut [Vec3]);
+
 impl SelfCollider {
+    /// Cloth against itself: repulsion (on a step's first pass), `repelled` on its answers,
+    /// then in continuous mode bounded CCD passes and the impact-zone fail-safe.
     #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &mut self,
@@ -39,6 +48,7 @@ impl SelfCollider {
         in_contact: &[bool],
         h: f64,
         first: bool,
+        repelled: Repelled,
     ) -> SelfOutcome {
         let n = x0.len().min(x1.len()).min(inv_mass.len());
         self.report = SelfContactReport::default();
@@ -68,6 +78,7 @@ impl SelfCollider {
         };
         match settings.mode {
             DetectionMode::Spheres => {
+                let before = self.start_repulsion(x1);
                 for k in 0..iters {
                     if self.repulsion_pass(x0, x1, v1, thickness, friction, true, false, k == 0)
                         == 0
@@ -75,9 +86,11 @@ impl SelfCollider {
                         break;
                     }
                 }
+                self.end_repulsion(before, x1, repelled);
                 self.outcome(0)
             }
             DetectionMode::Proximity => {
+                let before = self.start_repulsion(x1);
                 for k in 0..iters {
                     if self.repulsion_pass(x0, x1, v1, thickness, friction, false, true, k == 0)
                         == 0
@@ -85,10 +98,12 @@ impl SelfCollider {
                         break;
                     }
                 }
+                self.end_repulsion(before, x1, repelled);
                 self.outcome(0)
             }
             DetectionMode::Continuous => {
                 if first {
+                    let before = self.start_repulsion(x1);
                     // Jacobi passes close part of each deficit: repeat on the same candidates
                     // until the pairs are settled.
                     for k in 0..REPULSION_PASSES {
@@ -106,6 +121,7 @@ impl SelfCollider {
                             break;
                         }
                     }
+                    self.end_repulsion(before, x1, repelled);
                 }
                 let mut clean = false;
                 for _ in 0..iters {
@@ -122,6 +138,20 @@ impl SelfCollider {
                 self.outcome(unresolved)
             }
         }
+    }
+
+    /// The positions the repulsion starts from, kept for [`Self::end_repulsion`].
+    fn start_repulsion(&mut self, x1: &[Vec3]) -> Vec<Vec3> {
+        let mut before = std::mem::take(&mut self.before_repulsion);
+        before.clear();
+        before.extend_from_slice(x1);
+        before
+    }
+
+    /// Hands the repulsion's answers to the caller's hook, and keeps the buffer.
+    fn end_repulsion(&mut self, before: Vec<Vec3>, x1: &mut [Vec3], repelled: Repelled) {
+        repelled(&before, x1);
+        self.before_repulsion = before;
     }
 
     fn outcome(&self, unresolved: usize) -> SelfOutcome {
