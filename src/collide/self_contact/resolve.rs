@@ -25,16 +25,18 @@ pub(crate) struct SelfOutcome {
     pub report: SelfContactReport,
 }
 
-/// What the caller does with the repulsion's answers before the CCD passes: `repelled(before,
-/// x)`, with `before` the positions the repulsion started from (the simulation holds them to
-/// a stretch bound there, `sim::limit::ResponseBound`). Repulsion keeps layers a contact
-/// distance apart, which the next solve's layer springs also do; CCD and the impact zones after
-/// it keep them from crossing whatever the hook took back.
+/// What the caller does with the repulsion's answers before the CCD passes of continuous
+/// detection: `repelled(before, x)`, with `before` the positions the repulsion started from (the
+/// simulation holds them to a stretch bound there, `sim::limit::ResponseBound`). Repulsion keeps
+/// layers a contact distance apart, which the next solve's layer springs also do; CCD and the
+/// impact zones after it keep them from crossing whatever the hook took back. The proximity and
+/// sphere modes have no CCD after their repulsion, which is all that keeps their layers apart:
+/// they do not call it.
 pub(crate) type Repelled<'a> = &'a mut dyn FnMut(&[Vec3], &mut [Vec3]);
 
 impl SelfCollider {
-    /// Cloth against itself: repulsion (on a step's first pass), `repelled` on its answers,
-    /// then in continuous mode bounded CCD passes and the impact-zone fail-safe.
+    /// Cloth against itself: repulsion; in continuous mode (repulsion on a step's first pass
+    /// only) `repelled` on its answers, then bounded CCD passes and the impact-zone fail-safe.
     #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &mut self,
@@ -78,7 +80,6 @@ impl SelfCollider {
         };
         match settings.mode {
             DetectionMode::Spheres => {
-                let before = self.start_repulsion(x1);
                 for k in 0..iters {
                     if self.repulsion_pass(x0, x1, v1, thickness, friction, true, false, k == 0)
                         == 0
@@ -86,11 +87,9 @@ impl SelfCollider {
                         break;
                     }
                 }
-                self.end_repulsion(before, x1, repelled);
                 self.outcome(0)
             }
             DetectionMode::Proximity => {
-                let before = self.start_repulsion(x1);
                 for k in 0..iters {
                     if self.repulsion_pass(x0, x1, v1, thickness, friction, false, true, k == 0)
                         == 0
@@ -98,7 +97,6 @@ impl SelfCollider {
                         break;
                     }
                 }
-                self.end_repulsion(before, x1, repelled);
                 self.outcome(0)
             }
             DetectionMode::Continuous => {
