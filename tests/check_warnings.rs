@@ -32,6 +32,15 @@ fn towel_scene(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     path
 }
 
+/// The number that follows `prefix` in a warning line (up to the next space).
+fn number_after(line: &str, prefix: &str) -> f64 {
+    line.split(prefix)
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no number after {prefix:?} in {line}"))
+}
+
 const POSE: &str = "pose: { xyz: [0.879, -0.255, 0.392], rpy: [1.5707963267948966, 0.0, 0.0] }";
 const ATTACH: &str = "near: { point: [0.0, 0.0, -0.13], radius: 0.03 }";
 
@@ -74,12 +83,7 @@ fn degrees_and_a_towel_two_metres_from_its_link_are_warned_about() {
     assert_eq!(attach.len(), 1, "{out}");
     assert!(attach[0].contains("from link `right_palm`"), "{out}");
     // The distance printed is the corner's, about two metres (the towel moved 2 m).
-    let metres: f64 = attach[0]
-        .split("are ")
-        .nth(1)
-        .and_then(|r| r.split(" m").next())
-        .and_then(|m| m.parse().ok())
-        .unwrap();
+    let metres = number_after(attach[0], "are ");
     assert!((1.8..2.2).contains(&metres), "{metres}\n{out}");
     // Two metres off, the towel is also more than a metre from every link: true, and said.
     assert!(
@@ -244,7 +248,7 @@ effects: [gravity, stretch]
 solver: {{ integrator: implicit, dt: 0.01 }}
 cloths:
   - name: towel
-    grid: {{ size: [0.1, 0.1], resolution: [6, 6], pose: {{ xyz: [0.55, 0.0, -0.05], rpy: [1.5707963267948966, 0.0, 0.0] }} }}
+    grid: {{ size: [0.1, 0.1], resolution: [6, 6], pose: {{ xyz: [0.55, 0.0, -0.05], rpy: [{upright}, 0.0, 0.0] }} }}
 robot:
   urdf: arm.urdf
   trajectory:
@@ -254,7 +258,8 @@ robot:
       - {{ t: 1.0, positions: [{angle}] }}
   attach:
     - {{ cloth: towel, link: arm, near: {{ point: [0.5, 0.0, 0.0], radius: 0.015 }} }}
-"#
+"#,
+                upright = std::f64::consts::FRAC_PI_2
             ),
         )
         .unwrap();
@@ -274,12 +279,7 @@ robot:
             assert!(held[0].contains("inside its link `base`"), "{out}");
             // The held corner enters the 10 cm post where the arm has turned by
             // atan(0.05 / 0.5) short of a quarter turn, and is deepest at the end, 5 cm in.
-            let first: f64 = held[0]
-                .split("from t = ")
-                .nth(1)
-                .and_then(|r| r.split(' ').next())
-                .and_then(|t| t.parse().ok())
-                .unwrap();
+            let first = number_after(held[0], "from t = ");
             let enters = 1.0 - (0.05f64 / 0.5).atan() / std::f64::consts::FRAC_PI_2;
             assert!((first - enters).abs() < 0.02, "{first} vs {enters}\n{out}");
             assert!(held[0].contains("0.05"), "{out}");

@@ -169,6 +169,9 @@ fn held_through_links(
     let (Some(r), Some(driver), Some(stage)) = (&scene.robot, driver, sim.collision()) else {
         return;
     };
+    if r.attach.is_empty() {
+        return;
+    }
     let robot = driver.robot();
     let solids = crate::collide::Solids::of(stage);
     let samples = (scene.duration / HELD_SAMPLE).ceil().clamp(1.0, 1e6) as usize;
