@@ -73,10 +73,11 @@ fn yaml(c: &Case) -> String {
         Link::Cylinder(r) => format!("{{ type: cylinder, radius: {r}, half_height: 0.8 }}"),
         Link::Plate(t) => format!("{{ type: box, half_extents: [1.0, {}, 0.6] }}", t / 2.0),
     };
-    // Rods lie along local y: roll them onto x, then turn by `angle` about world y.
+    // Rods lie along local y: a roll by `angle` tilts the axis towards z, the yaw lays it along
+    // x, so it ends along (-cos angle, 0, sin angle), turned in the sheet's plane.
     let rpy = match c.link {
         Link::Plate(_) => format!("[0.0, {}, 0.0]", c.angle),
-        _ => format!("[0.0, {}, 1.5707963267948966]", c.angle),
+        _ => format!("[{}, 0.0, 1.5707963267948966]", c.angle),
     };
     let pins = match s.pins {
         Pins::Free => String::new(),
@@ -329,7 +330,8 @@ fn pins_of(pinned: bool) -> Pins {
 /// corner pins; `FAST_LINK_ROW=1` pins the top row instead, `FAST_LINK_MU` sets the friction,
 /// `FAST_LINK_CI=1` the CI sheet, `FAST_LINK_FRAMES=1` prints every frame,
 /// `FAST_LINK_SUBSTEPS` the substeps per frame, `FAST_LINK_LIMIT` the strain limit,
-/// `FAST_LINK_KNEE` the stretch knee, `FAST_LINK_STIFFENING` its stiffening), printed.
+/// `FAST_LINK_KNEE` the stretch knee, `FAST_LINK_STIFFENING` its stiffening, `FAST_LINK_ANGLE`
+/// the rod's turn in the sheet's plane, `FAST_LINK_RES` the vertices a side), printed.
 #[test]
 #[ignore]
 fn one_case() {
@@ -347,6 +349,12 @@ fn one_case() {
     } else {
         full_sheet(pins)
     };
+    if let Some(res) = std::env::var("FAST_LINK_RES")
+        .ok()
+        .and_then(|m| m.parse().ok())
+    {
+        sheet.res = res;
+    }
     if let Some(mu) = std::env::var("FAST_LINK_MU")
         .ok()
         .and_then(|m| m.parse().ok())
@@ -366,7 +374,10 @@ fn one_case() {
         sheet,
         link,
         speed: p[2].parse().unwrap(),
-        angle: 0.0,
+        angle: std::env::var("FAST_LINK_ANGLE")
+            .ok()
+            .and_then(|a| a.parse().ok())
+            .unwrap_or(0.0),
         frames: 9,
     };
     println!("{:?}", run(&c));
@@ -480,9 +491,10 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
     rods(true, Pins::Free, true);
 }
 
-/// Rods of 3 and 5 mm at 5, 20 and 40 m/s through the CI sheet pinned at its top corners, of
-/// a fabric that stiffens past 3 % (`stretch_knee: 0.03`, `effects/springs.rs`): no crossing,
-/// and every edge within 1.06 of its rest length at every frame end.
+/// Rods of 3 and 5 mm at 5, 20 and 40 m/s, along the grid and turned 0.5 rad, through the CI
+/// sheet pinned at its top corners, of a fabric that stiffens past 3 % (`stretch_knee: 0.03`,
+/// `effects/springs.rs`): no crossing, and every edge within 1.06 of its rest length at every
+/// frame end.
 ///
 /// With linear springs the sheet overstretches far past the bound `1 + v / c + M g / k` of a
 /// 1-D front, and that is the model's answer, not an error: the pull of the columns over the
@@ -491,23 +503,30 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
 /// than drape's pinned sheets at every speed. Where it arises is measured by
 /// `pinned_sheet_stretch_by_pins_and_friction`.
 #[test]
-#[ignore = "known limit: the rod drags the sheet further than it is long and its pull goes \
-            through the corner springs: 1.18-1.37 against 1.06, no crossing"]
+#[ignore = "known limit: 1.07-1.22 against 1.06, no crossing. The two pinned vertices take the \
+            sheet's pull as point loads (pinned along its top row the sheet stays within 1.052 \
+            at 5 m/s), and at 40 m/s the sheet whips round its pins after the rod has let go, \
+            at one step a frame"]
 fn rods_through_a_pinned_sheet_of_stiffening_fabric_stay_near_its_knee() {
     let mut worst = Vec::new();
     for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
         for speed in [5.0, 20.0, 40.0] {
-            let mut sheet = ci_sheet(Pins::Corners);
-            sheet.knee = Some(0.03);
-            let c = Case {
-                sheet,
-                link,
-                speed,
-                angle: 0.0,
-                frames: 9,
-            };
-            let o = accept(&c, false);
-            worst.push((format!("{link:?} at {speed} m/s"), o.max_stretch));
+            for angle in [0.0, 0.5] {
+                let mut sheet = ci_sheet(Pins::Corners);
+                sheet.knee = Some(0.03);
+                let c = Case {
+                    sheet,
+                    link,
+                    speed,
+                    angle,
+                    frames: 9,
+                };
+                let o = accept(&c, false);
+                worst.push((
+                    format!("{link:?} at {speed} m/s, angle {angle}"),
+                    o.max_stretch,
+                ));
+            }
         }
     }
     eprintln!("{worst:?}");

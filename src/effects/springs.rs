@@ -470,7 +470,12 @@ impl Effect for Springs {
     /// at `L = (1 + e) l`); at rest length it has none, so a linearised step in which a link
     /// drags a vertex sideways leaves its neighbours behind and the edges between stretch. Where
     /// the drag's front is on its way (`front_strain`), the transverse term is raised to that of
-    /// the front's tension, as if the spring were already at it.
+    /// the front's tension, as if the spring were already at it. A spring with a knee takes the
+    /// front's strain only up to its knee: past it the stiffened tension (up to `r` times the
+    /// linear one) would tie the link's neighbours to the link so tightly that cloth cannot
+    /// slide round a rod, and a sheet pinned behind one is pulled taut between pins and rod (a
+    /// pinned sheet hit by 3 and 5 mm rods at 5-40 m/s, `tests/fast_links.rs`: edges to 1.22
+    /// against up to 1.99 when linearised at the stiffened tension).
     fn add_front_stiffness(&self, st: &State, front_strain: &[f64], dfdx: &mut BlockCsr) {
         let front = |i: u32| front_strain.get(i as usize).copied().unwrap_or(0.0);
         let slots = self
@@ -490,6 +495,11 @@ impl Effect for Springs {
             let n = d / len;
             // `T / (k L)`: at the spring's length now and at the front's strain.
             let transverse = (self.law(q, len - s.rest).0 / (k * len)).max(0.0);
+            // A stiffening spring is linearised at no more than its knee's strain (see above).
+            let e = match &self.knee {
+                Some(at) => e.min(at[q].extension / s.rest),
+                None => e,
+            };
             let at_front = self.law(q, e * s.rest).0 / (k * (1.0 + e) * s.rest);
             let extra = at_front - transverse;
             if extra <= 0.0 {
