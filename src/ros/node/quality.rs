@@ -15,8 +15,16 @@
 //! last [`WINDOW`] frames at the current level: one slow frame (a multigrid rebuild, the OS)
 //! moves no decision, and every decision sees only frames of the level it judges.
 //! - Over [`LOWER_ABOVE`] (10 % is left for publishing and message handling): one level down.
-//! - Under [`RAISE_BELOW`], after the level's wait: one level up. Between the two thresholds
-//!   nothing changes (hysteresis: a level that costs 0.5-0.9 of real time stays).
+//! - One level up, after the level's wait, when the level above is predicted to cost under
+//!   [`RAISE_TARGET`]: the load times that level's measured cost over this one's. Each move
+//!   between two neighbours measures that ratio (the last window before the move against the
+//!   first full one after it); until a pair has been measured it is taken as
+//!   [`ASSUMED_RATIO`]. Neighbours' costs differ by 1.08-2x from scene to scene (one rung of a
+//!   towel dragged with self-collision costs 1.1x the next, a halved substep count 2x), so a
+//!   fixed threshold either stays low where rungs are cheap or raises into overload where
+//!   they are dear. Under [`RAISE_BELOW`] a level is tried whatever its measured ratio (the
+//!   pair may have been measured while the scene's load changed). Between a raise that is not
+//!   predicted to hold and [`LOWER_ABOVE`] nothing changes (hysteresis).
 //! - A raise undone within [`PROBE`] frames (the level above could not hold real time)
 //!   doubles the wait before that level is tried again, up to [`MAX_WAIT`]: the controller
 //!   probes ever more rarely instead of oscillating.
@@ -32,9 +40,15 @@ use crate::scene::Scene;
 pub const WINDOW: usize = 8;
 /// Median load above which quality goes down.
 pub const LOWER_ABOVE: f64 = 0.9;
-/// Median load under which quality goes up (adjacent levels differ by ~1.3-2x in cost, so a
-/// raise from under 0.5 mostly lands under [`LOWER_ABOVE`]).
-pub const RAISE_BELOW: f64 = 0.5;
+/// The load the level above must be predicted to cost for a raise: room under [`LOWER_ABOVE`]
+/// for the median's noise between windows (a few percent) and a mispredicted ratio.
+pub const RAISE_TARGET: f64 = 0.75;
+/// The cost of a level over the one below it, until a move between them has measured it: a
+/// raise from under [`RAISE_BELOW`] then mostly lands under [`LOWER_ABOVE`] (adjacent levels
+/// cost up to ~2x each other).
+pub const ASSUMED_RATIO: f64 = 1.5;
+/// Median load under which quality goes up, whatever the level above was measured to cost.
+pub const RAISE_BELOW: f64 = RAISE_TARGET / ASSUMED_RATIO;
 /// Frames at a level before the first try of the level above (0.5 s at 60 Hz).
 pub const MIN_WAIT: u32 = 30;
 /// Longest wait before a probe (~64 s at 60 Hz).
@@ -151,6 +165,11 @@ pub struct QualityController {
     /// The level last raised into and the frames since.
     probe: Option<(usize, u32)>,
     short: Option<f64>,
+    /// `ratio[l]`: the measured cost of level `l` over level `l + 1` (see the module doc).
+    ratio: Vec<Option<f64>>,
+    /// The last move: the level left and its last window's load, until the new level's first
+    /// full window measures the pair's ratio.
+    moved_from: Option<(usize, f64)>,
 }
 
 impl QualityController {
@@ -172,6 +191,8 @@ impl QualityController {
             wait: vec![MIN_WAIT; n],
             probe: None,
             short: None,
+            ratio: vec![None; n],
+            moved_from: None,
         }
     }
 
@@ -210,13 +231,16 @@ impl QualityController {
             return Decision::Keep;
         }
         let load = median(&self.window);
+        if let Some((from, before)) = self.moved_from.take() {
+            self.measure(from, before, load);
+        }
         if load > LOWER_ABOVE && self.level < self.lowest {
             if let Some((l, age)) = self.probe.take() {
                 if l == self.level && age <= PROBE {
                     self.wait[l] = (self.wait[l] * 2).min(MAX_WAIT);
                 }
             }
-            self.go(self.level + 1);
+            self.go(self.level + 1, load);
             return Decision::Lowered {
                 quality: self.quality(),
                 load,
@@ -244,9 +268,11 @@ impl QualityController {
                 self.probe = None;
             }
         }
-        if load < RAISE_BELOW && self.level > 0 && self.frames_at_level >= self.wait[self.level - 1]
+        if self.level > 0
+            && (load < RAISE_BELOW || self.predicted_above(load) < RAISE_TARGET)
+            && self.frames_at_level >= self.wait[self.level - 1]
         {
-            self.go(self.level - 1);
+            self.go(self.level - 1, load);
             self.probe = Some((self.level, 0));
             return Decision::Raised {
                 quality: self.quality(),
@@ -265,11 +291,37 @@ impl QualityController {
         self.lowest = self.level - 1;
         self.short = None;
         self.probe = None;
-        self.go(self.lowest);
+        self.go(self.lowest, f64::NAN);
+        self.moved_from = None;
         Some(self.quality())
     }
 
-    fn go(&mut self, level: usize) {
+    /// The load the level above would have at this one's `load`: times the pair's measured
+    /// ratio, or [`ASSUMED_RATIO`].
+    fn predicted_above(&self, load: f64) -> f64 {
+        let ratio = self.level.checked_sub(1).and_then(|l| self.ratio[l]);
+        load * ratio.unwrap_or(ASSUMED_RATIO)
+    }
+
+    /// A move from level `from` (its last window's load `before`) to the current level, whose
+    /// first full window's load is `after`: the ratio of the upper level's cost over the
+    /// lower's, at least 1 (a higher quality never costs less; a smaller measurement is the
+    /// scene's load changing between the windows).
+    fn measure(&mut self, from: usize, before: f64, after: f64) {
+        let (upper, lower) = if from < self.level {
+            (before, after)
+        } else {
+            (after, before)
+        };
+        let pair = from.min(self.level);
+        if from.abs_diff(self.level) == 1 && lower > 0.0 && upper.is_finite() {
+            self.ratio[pair] = Some((upper / lower).max(1.0));
+        }
+    }
+
+    /// Moves to `level`, leaving the current one at `load`.
+    fn go(&mut self, level: usize, load: f64) {
+        self.moved_from = Some((self.level, load));
         self.level = level;
         self.window.clear();
         self.frames_at_level = 0;
@@ -495,6 +547,43 @@ mod tests {
         let changes = drive(&mut c, 60 * 60, |_| 0.2);
         assert!(changes.iter().all(|d| matches!(d, Decision::Raised { .. })));
         assert_eq!(c.quality(), towel());
+    }
+
+    #[test]
+    fn cheap_rungs_are_climbed_as_far_as_they_are_measured_to_hold() {
+        // A start that overloads every level takes the controller to the lowest; then each
+        // rung costs 1.08x the next (0.55 at the lowest, 0.81 two rungs from the top): a load
+        // over `RAISE_BELOW` everywhere, so only the measured ratios raise it.
+        let settled = |l: usize| 0.55 * 1.08f64.powi(7 - l as i32);
+        let mut c = controller();
+        let lowest = c.ladder().len() - 1;
+        assert_eq!(lowest, 7);
+        drive(&mut c, 600, |_| 5.0);
+        assert_eq!(c.status().level, lowest);
+        let changes = drive(&mut c, 60 * 60, settled);
+        assert!(
+            changes.iter().all(|d| matches!(d, Decision::Raised { .. })),
+            "{changes:?}"
+        );
+        let level = c.status().level;
+        assert!(level <= 3 && settled(level) < LOWER_ABOVE, "level {level}");
+        assert!(drive(&mut c, 60 * 60, settled).is_empty());
+    }
+
+    #[test]
+    fn a_raise_the_ratio_mispredicted_is_measured_and_not_repeated() {
+        // Measured at 1 during the overloaded start, the lowest rung's ratio to the one above is
+        // 2 once the load settles: the one probe fails and measures it.
+        let settled = |l: usize| if l == 7 { 0.55 } else { 1.1 };
+        let mut c = controller();
+        drive(&mut c, 600, |_| 5.0);
+        let changes = drive(&mut c, 60 * 60 * 5, settled);
+        let raises = changes
+            .iter()
+            .filter(|d| matches!(d, Decision::Raised { .. }))
+            .count();
+        assert_eq!(raises, 1, "{changes:?}");
+        assert_eq!(c.status().level, 7);
     }
 
     #[test]
