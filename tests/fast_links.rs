@@ -491,6 +491,29 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
     rods(true, Pins::Free, true);
 }
 
+/// The pinned-sheet rod cases: a 3 mm capsule and a 5 mm cylinder at 5, 20 and 40 m/s, along
+/// the grid and turned 0.5 rad, through the CI sheet pinned at its top corners, its material
+/// set by `material`; 9 frames each.
+fn pinned_rod_cases(material: impl Fn(&mut Sheet)) -> Vec<Case> {
+    let mut cases = Vec::new();
+    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
+        for speed in [5.0, 20.0, 40.0] {
+            for angle in [0.0, 0.5] {
+                let mut sheet = ci_sheet(Pins::Corners);
+                material(&mut sheet);
+                cases.push(Case {
+                    sheet,
+                    link,
+                    speed,
+                    angle,
+                    frames: 9,
+                });
+            }
+        }
+    }
+    cases
+}
+
 /// Rods of 3 and 5 mm at 5, 20 and 40 m/s, along the grid and turned 0.5 rad, through the CI
 /// sheet pinned at its top corners, of a fabric that stiffens past 3 % (`stretch_knee: 0.03`,
 /// `effects/springs.rs`): no crossing, and every edge within 1.06 of its rest length at every
@@ -509,25 +532,12 @@ fn cylinders_through_a_free_sheet_carry_it_without_crossing_or_overstretching() 
             at one step a frame"]
 fn rods_through_a_pinned_sheet_of_stiffening_fabric_stay_near_its_knee() {
     let mut worst = Vec::new();
-    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
-        for speed in [5.0, 20.0, 40.0] {
-            for angle in [0.0, 0.5] {
-                let mut sheet = ci_sheet(Pins::Corners);
-                sheet.knee = Some(0.03);
-                let c = Case {
-                    sheet,
-                    link,
-                    speed,
-                    angle,
-                    frames: 9,
-                };
-                let o = accept(&c, false);
-                worst.push((
-                    format!("{link:?} at {speed} m/s, angle {angle}"),
-                    o.max_stretch,
-                ));
-            }
-        }
+    for c in pinned_rod_cases(|s| s.knee = Some(0.03)) {
+        let o = accept(&c, false);
+        worst.push((
+            format!("{:?} at {} m/s, angle {}", c.link, c.speed, c.angle),
+            o.max_stretch,
+        ));
     }
     eprintln!("{worst:?}");
     let over: Vec<_> = worst.iter().filter(|(_, s)| *s > 1.06).collect();
@@ -539,19 +549,8 @@ fn rods_through_a_pinned_sheet_of_stiffening_fabric_stay_near_its_knee() {
 /// 5, 20 and 40 m/s, along the grid and turned 0.5 rad.
 #[test]
 fn rods_through_a_pinned_sheet_do_not_cross_it() {
-    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
-        for speed in [5.0, 20.0, 40.0] {
-            for angle in [0.0, 0.5] {
-                let c = Case {
-                    sheet: ci_sheet(Pins::Corners),
-                    link,
-                    speed,
-                    angle,
-                    frames: 9,
-                };
-                accept(&c, false);
-            }
-        }
+    for c in pinned_rod_cases(|_| {}) {
+        accept(&c, false);
     }
 }
 
@@ -563,21 +562,8 @@ fn rods_through_a_pinned_sheet_do_not_cross_it() {
 /// spacing fast contact bounds a link's step by.
 #[test]
 fn with_a_strain_limit_rods_through_a_pinned_sheet_do_not_cross_it() {
-    for link in [Link::Capsule(0.0015), Link::Cylinder(0.0025)] {
-        for speed in [5.0, 20.0, 40.0] {
-            for angle in [0.0, 0.5] {
-                let mut sheet = ci_sheet(Pins::Corners);
-                sheet.strain_limit = Some(0.1);
-                let c = Case {
-                    sheet,
-                    link,
-                    speed,
-                    angle,
-                    frames: 9,
-                };
-                accept(&c, false);
-            }
-        }
+    for c in pinned_rod_cases(|s| s.strain_limit = Some(0.1)) {
+        accept(&c, false);
     }
 }
 
